@@ -1,0 +1,1 @@
+"""Character kinematics reference library."""

@@ -1,0 +1,206 @@
+r"""Unit quaternions, scalar first.
+
+:math:`q = (w, x, y, z) = (\cos\frac\theta2, \sin\frac\theta2\,u)` for a turn by θ about u.
+A unit quaternion :math:`q` rotates a vector by :math:`v' = q\,v\,q^*` (active rotation,
+Hamilton product). :math:`q` and :math:`-q` are the same rotation; :func:`quat_canonical`
+picks the one with :math:`w \ge 0`. All functions broadcast over leading dimensions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._checks import as_array, nonzero_norm
+
+Array = NDArray[np.float64]
+
+
+def quat_identity(shape: tuple[int, ...] = ()) -> Array:
+    """Identity quaternions ``(1, 0, 0, 0)`` of shape ``shape + (4,)``."""
+    q = np.zeros(shape + (4,))
+    q[..., 0] = 1.0
+    return q
+
+
+def quat_mul(a: ArrayLike, b: ArrayLike) -> Array:
+    r"""Hamilton product :math:`a\,b`: rotate by :math:`b` first, then by :math:`a`.
+
+    .. math::
+        a b = (w_a w_b - \mathbf v_a\cdot\mathbf v_b,\;
+               w_a \mathbf v_b + w_b \mathbf v_a + \mathbf v_a \times \mathbf v_b)
+
+    Parameters
+    ----------
+    a, b : array_like, shape (..., 4)
+        Quaternions (w, x, y, z); leading dimensions broadcast.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+    """
+    a = as_array(a, "a", (4,))
+    b = as_array(b, "b", (4,))
+    return _mul(a, b)
+
+
+def _mul(a: Array, b: Array) -> Array:
+    # Unchecked product for inner loops (forward kinematics, solvers).
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ],
+        axis=-1,
+    )
+
+
+def quat_conjugate(q: ArrayLike) -> Array:
+    r"""Conjugate :math:`q^* = (w, -x, -y, -z)`; the inverse rotation of a unit quaternion."""
+    q = as_array(q, "q", (4,))
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_inverse(q: ArrayLike) -> Array:
+    r"""Inverse :math:`q^{-1} = q^* / \lVert q\rVert^2` (also for non-unit quaternions).
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is the zero quaternion.
+    """
+    q = as_array(q, "q", (4,))
+    n2 = nonzero_norm(q, "q", "the zero quaternion is no rotation") ** 2
+    return quat_conjugate(q) / n2[..., None]
+
+
+def quat_normalize(q: ArrayLike) -> Array:
+    r"""Scale ``q`` to unit length, :math:`q / \lVert q\rVert`.
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is the zero quaternion, which is no rotation.
+    """
+    q = as_array(q, "q", (4,))
+    return q / nonzero_norm(q, "q", "the zero quaternion is no rotation")[..., None]
+
+
+def quat_canonical(q: ArrayLike) -> Array:
+    """The sign of ``q`` with ``w >= 0`` (ties broken by the first non-zero of x, y, z).
+
+    ``q`` and ``-q`` are the same rotation; this picks one deterministically so that
+    quaternions can be compared entry by entry.
+    """
+    q = as_array(q, "q", (4,))
+    # First non-zero component decides the sign, so w == 0 (180 degree turns) is handled too.
+    nz = np.abs(q) > 1e-15
+    first = np.argmax(nz, axis=-1)
+    lead = np.take_along_axis(q, first[..., None], axis=-1)
+    return np.where(lead < 0, -q, q)
+
+
+def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
+    r"""Rotate vectors ``v`` by unit quaternions ``q``: :math:`v' = q\,v\,q^*`.
+
+    Computed as :math:`v' = v + 2w(\mathbf u\times v) + 2\,\mathbf u\times(\mathbf u\times v)`
+    with :math:`\mathbf u = (x, y, z)`, which is the same for a unit ``q`` and cheaper.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+    v : array_like, shape (..., 3)
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+    """
+    q = as_array(q, "q", (4,))
+    v = as_array(v, "v", (3,))
+    return _rotate(q, v)
+
+
+def _rotate(q: Array, v: Array) -> Array:
+    u = q[..., 1:]
+    t = 2.0 * np.cross(u, v)
+    return v + q[..., :1] * t + np.cross(u, t)
+
+
+def matrix_from_quat(q: ArrayLike) -> Array:
+    r"""Rotation matrix of a unit quaternion.
+
+    .. math::
+        R = \begin{pmatrix}
+        1-2(y^2+z^2) & 2(xy-wz) & 2(xz+wy)\\
+        2(xy+wz) & 1-2(x^2+z^2) & 2(yz-wx)\\
+        2(xz-wy) & 2(yz+wx) & 1-2(x^2+y^2)
+        \end{pmatrix}
+
+    ``q`` is normalised first, so a slightly non-unit quaternion still gives an orthogonal
+    matrix.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+    """
+    w, x, y, z = np.moveaxis(quat_normalize(q), -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=-2,
+    )
+
+
+def quat_from_matrix(R: ArrayLike) -> Array:
+    r"""Unit quaternion (``w >= 0``) of a rotation matrix.
+
+    Uses the numerically stable branch of Shepperd's method: of :math:`4w^2 = 1 + \mathrm{tr}R`
+    and :math:`4x^2 = 1 + R_{00} - R_{11} - R_{22}` (and likewise y, z), the largest is solved
+    first and the others follow from off-diagonal sums, so no division by a tiny number.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3)
+        Rotation matrices (orthonormal, det +1).
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+    """
+    R = as_array(R, "R", (3, 3))
+    m00, m11, m22 = R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]
+    # Candidate 4*q_k^2 for k = w, x, y, z.
+    d = np.stack(
+        [1 + m00 + m11 + m22, 1 + m00 - m11 - m22, 1 - m00 + m11 - m22, 1 - m00 - m11 + m22],
+        axis=-1,
+    )
+    r21, r12 = R[..., 2, 1], R[..., 1, 2]
+    r02, r20 = R[..., 0, 2], R[..., 2, 0]
+    r10, r01 = R[..., 1, 0], R[..., 0, 1]
+    s21, s02, s10 = r21 - r12, r02 - r20, r10 - r01
+    a21, a02, a10 = r21 + r12, r02 + r20, r10 + r01
+    # Each row: the quaternion times 4*q_k when solving for component k.
+    cands = np.stack(
+        [
+            np.stack([d[..., 0], s21, s02, s10], -1),
+            np.stack([s21, d[..., 1], a10, a02], -1),
+            np.stack([s02, a10, d[..., 2], a21], -1),
+            np.stack([s10, a02, a21, d[..., 3]], -1),
+        ],
+        axis=-2,
+    )
+    k = np.argmax(d, axis=-1)
+    q = np.take_along_axis(cands, k[..., None, None], axis=-2)[..., 0, :]
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] < 0, -q, q)
