@@ -1,0 +1,44 @@
+# The two commands of the README: `make lab` and `make test`.
+VENV    ?= .venv
+PYTHON  ?= python3
+PY      := $(VENV)/bin/python
+STAMP   := $(VENV)/.installed
+
+# Headless rendering: VTK through EGL, pyvista as static images, no display needed.
+export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
+TEST_ENV := PYVISTA_JUPYTER_BACKEND=static PYVISTA_OFF_SCREEN=true
+
+.PHONY: lab test e2e setup sysdeps lint clean
+
+lab: setup
+	$(VENV)/bin/jupyter lab notebooks/
+
+test: setup
+	$(TEST_ENV) $(PY) -m pytest --nbval-lax tests notebooks assignments
+
+lint: setup
+	$(VENV)/bin/ruff check .
+
+setup: sysdeps $(STAMP)
+
+$(STAMP): pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	@echo "Installing the course into $(VENV) (first time: about 2 minutes)..."
+	@$(PY) -m pip install --quiet --upgrade pip > $(VENV)/install.log 2>&1 || (cat $(VENV)/install.log; exit 1)
+	@$(PY) -m pip install --quiet -e '.[dev]' >> $(VENV)/install.log 2>&1 || (cat $(VENV)/install.log; exit 1)
+	@touch $@
+
+# pip's VTK wheel needs libGL/libEGL; a bare Debian lacks them. Install them when we can
+# (root with apt-get), otherwise say what is missing.
+sysdeps:
+	@if command -v ldconfig >/dev/null 2>&1 && ! ldconfig -p | grep -q 'libEGL.so.1'; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "Installing libgl1 libegl1 for off-screen 3D rendering..."; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libgl1 libegl1 >/dev/null; \
+	  else \
+	    echo "warning: libEGL.so.1 not found; 3D views need: apt-get install libgl1 libegl1"; \
+	  fi; \
+	fi
+
+clean:
+	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis
