@@ -9,6 +9,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+# How far R^T R may be from I before a matrix is rejected as "not a rotation". Loose enough
+# for matrices that went through float32 or a long chain of products, tight enough to catch
+# scaled, sheared or transposed-by-mistake input.
+ROTATION_MATRIX_TOL = 1e-5
+
 
 def as_array(x: ArrayLike, name: str, last: tuple[int, ...] = ()) -> NDArray[np.float64]:
     """Return ``x`` as a finite float64 array whose trailing shape is ``last``.
@@ -16,9 +21,11 @@ def as_array(x: ArrayLike, name: str, last: tuple[int, ...] = ()) -> NDArray[np.
     Raises
     ------
     ValueError
-        If the trailing shape is wrong or any entry is NaN or infinite; the message names
-        ``name``.
+        If ``x`` is not numeric, the trailing shape is wrong, or any entry is NaN or
+        infinite; the message names ``name``.
     """
+    if x is None:
+        raise ValueError(f"{name}: expected numbers, got None")
     try:
         a = np.asarray(x, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -34,14 +41,64 @@ def as_array(x: ArrayLike, name: str, last: tuple[int, ...] = ()) -> NDArray[np.
     return a
 
 
+def _index(mask: NDArray[np.bool_]) -> str:
+    """`` at index (i, j)`` of the first True entry of ``mask``, or ``""`` for a scalar."""
+    if np.ndim(mask) == 0:
+        return ""
+    return f" at index {tuple(int(i) for i in np.argwhere(mask)[0])}"
+
+
 def nonzero_norm(
     x: NDArray[np.float64], name: str, why: str = "a direction needs a non-zero vector",
     eps: float = 1e-12,
 ) -> NDArray[np.float64]:
     """Norm of the last axis of ``x``; a ``ValueError`` naming ``name`` and ``why`` if any is ~0."""
     n = np.linalg.norm(x, axis=-1)
-    if np.any(n < eps):
-        where = np.argwhere(np.atleast_1d(n) < eps)[0]
-        at = f" at index {tuple(int(i) for i in where)}" if np.ndim(n) else ""
-        raise ValueError(f"{name}: has zero length{at}; {why}")
+    small = n < eps
+    if np.any(small):
+        raise ValueError(f"{name}: has zero length{_index(small)}; {why}")
     return n
+
+
+def as_unit(
+    x: ArrayLike, name: str, size: int = 3, why: str = "a direction needs a non-zero vector"
+) -> NDArray[np.float64]:
+    """``x`` checked by :func:`as_array` (trailing size ``size``) and scaled to unit length."""
+    a = as_array(x, name, (size,))
+    return a / nonzero_norm(a, name, why)[..., None]
+
+
+def _dot(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.einsum("...i,...i->...", a, b)
+
+
+def as_rotation_matrix(R: ArrayLike, name: str = "R") -> NDArray[np.float64]:
+    r"""``R`` checked to be a stack of rotation matrices, shape ``(..., 3, 3)``.
+
+    A rotation matrix is orthonormal, :math:`R^T R = I`, with :math:`\det R = +1`.
+
+    Raises
+    ------
+    ValueError
+        If ``R`` has the wrong shape or non-finite entries, is not orthonormal to within
+        ``ROTATION_MATRIX_TOL``, or is a reflection (``det R = -1``).
+    """
+    R = as_array(R, name, (3, 3))
+    c0, c1, c2 = R[..., 0], R[..., 1], R[..., 2]  # columns
+    # The six distinct entries of R^T R - I, one dot product each (faster than a batched
+    # 3x3 matmul).
+    err = np.abs([_dot(c0, c0) - 1, _dot(c1, c1) - 1, _dot(c2, c2) - 1,
+                  _dot(c0, c1), _dot(c0, c2), _dot(c1, c2)]).max(axis=0)
+    bad = err > ROTATION_MATRIX_TOL
+    if np.any(bad):
+        worst = float(np.max(err))
+        raise ValueError(
+            f"{name}: not a rotation matrix{_index(bad)} (R^T R differs from I by up to "
+            f"{worst:.3g}); the columns must be orthonormal"
+        )
+    flipped = _dot(c0, np.cross(c1, c2)) < 0  # det R
+    if np.any(flipped):
+        raise ValueError(
+            f"{name}: has determinant -1{_index(flipped)}; that is a reflection, not a rotation"
+        )
+    return R

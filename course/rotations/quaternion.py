@@ -11,14 +11,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_array, nonzero_norm
+from ._checks import as_array, as_rotation_matrix, nonzero_norm
 
 Array = NDArray[np.float64]
 
 
-def quat_identity(shape: tuple[int, ...] = ()) -> Array:
-    """Identity quaternions ``(1, 0, 0, 0)`` of shape ``shape + (4,)``."""
-    q = np.zeros(shape + (4,))
+def quat_identity(shape: int | tuple[int, ...] = ()) -> Array:
+    """Identity quaternions ``(1, 0, 0, 0)`` of shape ``shape + (4,)`` (an int n means (n,))."""
+    shape = (shape,) if isinstance(shape, (int, np.integer)) else tuple(shape)
+    q = np.zeros((*shape, 4))
     q[..., 0] = 1.0
     return q
 
@@ -94,9 +95,14 @@ def quat_canonical(q: ArrayLike) -> Array:
     """The sign of ``q`` with ``w >= 0`` (ties broken by the first non-zero of x, y, z).
 
     ``q`` and ``-q`` are the same rotation; this picks one deterministically so that
-    quaternions can be compared entry by entry.
+    quaternions can be compared entry by entry. A component with magnitude below 1e-15 counts
+    as zero, so for half turns (``w`` = 0 up to rounding) the first non-zero of x, y, z is
+    made positive and the result is the same whichever sign the rounding gave ``w``.
     """
-    q = as_array(q, "q", (4,))
+    return _canonical(as_array(q, "q", (4,)))
+
+
+def _canonical(q: Array) -> Array:
     # First non-zero component decides the sign, so w == 0 (180 degree turns) is handled too.
     nz = np.abs(q) > 1e-15
     first = np.argmax(nz, axis=-1)
@@ -107,8 +113,9 @@ def quat_canonical(q: ArrayLike) -> Array:
 def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     r"""Rotate vectors ``v`` by unit quaternions ``q``: :math:`v' = q\,v\,q^*`.
 
-    Computed as :math:`v' = v + 2w(\mathbf u\times v) + 2\,\mathbf u\times(\mathbf u\times v)`
-    with :math:`\mathbf u = (x, y, z)`, which is the same for a unit ``q`` and cheaper.
+    ``q`` is normalised first (so it must not be zero). Computed as
+    :math:`v' = v + 2w(\mathbf u\times v) + 2\,\mathbf u\times(\mathbf u\times v)` with
+    :math:`\mathbf u = (x, y, z)`, which is the same for a unit ``q`` and cheaper.
 
     Parameters
     ----------
@@ -119,12 +126,13 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     -------
     ndarray, shape (..., 3)
     """
-    q = as_array(q, "q", (4,))
+    q = quat_normalize(q)
     v = as_array(v, "v", (3,))
     return _rotate(q, v)
 
 
 def _rotate(q: Array, v: Array) -> Array:
+    # Unchecked, for unit q in inner loops.
     u = q[..., 1:]
     t = 2.0 * np.cross(u, v)
     return v + q[..., :1] * t + np.cross(u, t)
@@ -151,19 +159,23 @@ def matrix_from_quat(q: ArrayLike) -> Array:
     -------
     ndarray, shape (..., 3, 3)
     """
-    w, x, y, z = np.moveaxis(quat_normalize(q), -1, 0)
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        axis=-2,
-    )
+    q = quat_normalize(q)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    R = np.empty(q.shape[:-1] + (3, 3))
+    R[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    R[..., 0, 1] = 2 * (x * y - w * z)
+    R[..., 0, 2] = 2 * (x * z + w * y)
+    R[..., 1, 0] = 2 * (x * y + w * z)
+    R[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    R[..., 1, 2] = 2 * (y * z - w * x)
+    R[..., 2, 0] = 2 * (x * z - w * y)
+    R[..., 2, 1] = 2 * (y * z + w * x)
+    R[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return R
 
 
 def quat_from_matrix(R: ArrayLike) -> Array:
-    r"""Unit quaternion (``w >= 0``) of a rotation matrix.
+    r"""Unit quaternion of a rotation matrix, in the canonical sign of :func:`quat_canonical`.
 
     Uses the numerically stable branch of Shepperd's method: of :math:`4w^2 = 1 + \mathrm{tr}R`
     and :math:`4x^2 = 1 + R_{00} - R_{11} - R_{22}` (and likewise y, z), the largest is solved
@@ -177,8 +189,14 @@ def quat_from_matrix(R: ArrayLike) -> Array:
     Returns
     -------
     ndarray, shape (..., 4)
+
+    Raises
+    ------
+    ValueError
+        If ``R`` is not a stack of rotation matrices (wrong shape, not orthonormal, or a
+        reflection).
     """
-    R = as_array(R, "R", (3, 3))
+    R = as_rotation_matrix(R, "R")
     m00, m11, m22 = R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]
     # Candidate 4*q_k^2 for k = w, x, y, z.
     d = np.stack(
@@ -202,5 +220,4 @@ def quat_from_matrix(R: ArrayLike) -> Array:
     )
     k = np.argmax(d, axis=-1)
     q = np.take_along_axis(cands, k[..., None, None], axis=-2)[..., 0, :]
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(q[..., :1] < 0, -q, q)
+    return _canonical(q / np.linalg.norm(q, axis=-1, keepdims=True))

@@ -1,0 +1,26 @@
+"""Shared fixtures: where the real motion-capture clips are."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def shared_bvh_path() -> Path:
+    """The local mirror of the sample clips: $COURSE_DATA_DIR or ../shared/data/bvh."""
+    env = os.environ.get("COURSE_DATA_DIR")
+    return Path(env) if env else REPO.parent / "shared" / "data" / "bvh"
+
+
+@pytest.fixture(scope="session")
+def shared_bvh_dir() -> Path:
+    path = shared_bvh_path()
+    if not (path / "cmu_12_01_walk.bvh").exists():
+        if os.environ.get("CI"):
+            pytest.fail(f"CI must have the shared clips at {path}")
+        pytest.skip(f"shared motion-capture clips not found at {path}")
+    return path

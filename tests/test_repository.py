@@ -1,0 +1,44 @@
+"""Repository-wide rules: clean notebooks, a light `import course`, lint."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from conftest import REPO
+
+NOTEBOOKS = sorted([*REPO.glob("notebooks/*.ipynb"), *REPO.glob("assignments/*.ipynb")])
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_notebook_committed_without_outputs(path):
+    cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    dirty = [
+        i for i, c in enumerate(cells)
+        if c["cell_type"] == "code" and (c.get("outputs") or c.get("execution_count"))
+    ]
+    assert not dirty, f"{path.name}: cells {dirty} have outputs; clear them before committing"
+
+
+def test_import_course_is_light():
+    code = (
+        "import sys, time; t = time.perf_counter(); import course, course.rotations;"
+        "dt = time.perf_counter() - t;"
+        "heavy = sorted(m for m in ('scipy', 'pyvista', 'matplotlib', 'vtk') if m in sys.modules);"
+        "print(dt, ','.join(heavy))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    seconds, heavy = out.stdout.split()[0], out.stdout.split()[1:]
+    assert not heavy, f"import course pulled in {heavy}"
+    assert float(seconds) < 0.5, f"import course took {float(seconds):.2f} s"
+
+
+def test_ruff_clean():
+    ruff = REPO / ".venv" / "bin" / "ruff"
+    if not ruff.exists():
+        pytest.skip("ruff is installed by `make test`")
+    out = subprocess.run([str(ruff), "check", "--quiet", str(REPO)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout + out.stderr
