@@ -1,0 +1,700 @@
+r"""Read and write BVH motion capture (Biovision Hierarchy).
+
+A BVH file has two parts::
+
+    HIERARCHY                                   MOTION
+    ROOT Hips                                   Frames: 524
+    {                                           Frame Time: .0083333
+        OFFSET 0 0 0                            <one line per frame: every channel's value,
+        CHANNELS 6 Xposition Yposition ...       joints in file order, channels in their
+        JOINT LHipJoint { ... }                  declared order>
+        End Site { OFFSET ... }
+    }
+
+Every joint becomes a joint of the :class:`~course.skeleton.Skeleton`, End Sites too (named
+``"<Parent>_end"``, no channels). Angles are in degrees in the file; a joint's rotation
+channels compose *intrinsically* in file order, so ``Zrotation Yrotation Xrotation`` is the
+Euler order ``"ZYX"``, :math:`R = R_Z(\alpha) R_Y(\beta) R_X(\gamma)`. A position channel
+replaces that axis of the joint's OFFSET (for the root: its position).
+
+The reader accepts what real exporters write (CRLF or mixed line endings, tabs, blank lines,
+no final newline, ``.0083333``, leaf joints without End Site, ``Frame Time:`` spacing) and
+refuses anything else with a :class:`BVHError` naming the file, the line and the problem.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .motion import (
+    POSITION_CHANNELS,
+    ROTATION_CHANNELS,
+    Motion,
+    euler_order,
+    is_end_site,
+    rotation_axes,
+)
+from .rotations import euler_from_quat, quat_from_euler, quat_identity
+from .skeleton import Skeleton
+
+Array = NDArray[np.float64]
+
+__all__ = [
+    "BVHError",
+    "BVHWarning",
+    "format_bvh",
+    "format_bvh_channels",
+    "load_bvh",
+    "parse_bvh",
+    "save_bvh",
+]
+
+_CHANNEL_NAMES = {c.upper(): c for c in POSITION_CHANNELS + ROTATION_CHANNELS}
+_FRAMES = re.compile(r"\s*frames\s*:\s*(.*?)\s*$", re.IGNORECASE)
+_FRAME_TIME = re.compile(r"\s*frame\s*time\s*:\s*(.*?)\s*$", re.IGNORECASE)
+# Components a rotation channel set cannot express are tolerated up to this (degrees).
+_DROPPED_ANGLE_TOL = 1e-6
+
+
+class BVHError(ValueError):
+    """A malformed BVH file.
+
+    Attributes
+    ----------
+    path : str
+        The file (or the ``source`` given to :func:`parse_bvh`).
+    line : int or None
+        1-based line number of the problem.
+    problem : str
+        What is wrong, without the location.
+    """
+
+    def __init__(self, problem: str, path: str, line: int | None = None) -> None:
+        self.problem, self.path, self.line = problem, path, line
+        where = path if line is None else f"{path}, line {line}"
+        super().__init__(f"{where}: {problem}")
+
+    def __reduce__(self):  # keep path and line across pickling (worker processes)
+        return type(self), (self.problem, self.path, self.line)
+
+
+class BVHWarning(UserWarning):
+    """A BVH quirk the reader worked around (e.g. more frame lines than declared)."""
+
+
+# -- reading -------------------------------------------------------------------------------
+
+
+def load_bvh(path: str | os.PathLike[str]) -> Motion:
+    """Read a BVH file.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    Motion
+        One joint per ``ROOT``/``JOINT``/``End Site`` in file order (End Sites named
+        ``"<Parent>_end"``, then ``"<Parent>_end2"``, ... if a joint has several), with
+        ``channels`` as declared. ``local_rotations[t, j]`` is the product of the joint's
+        rotation channels in file order (identity without any); ``root_positions`` are the
+        root's position channels (an axis without a channel keeps the root's OFFSET);
+        ``translations`` is set only if a non-root joint has position channels (see
+        :class:`~course.motion.Motion`). ``name`` is the file stem, ``source`` the path.
+
+    Raises
+    ------
+    BVHError
+        If the file is malformed (the message names the file and line).
+    OSError
+        If the file cannot be read.
+    """
+    path = Path(path)
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:  # joint names from old Windows exporters
+        text = raw.decode("latin-1")
+    return parse_bvh(text, source=str(path), name=path.stem)
+
+
+def parse_bvh(text: str, source: str = "<string>", name: str = "") -> Motion:
+    """Parse the text of a BVH file; see :func:`load_bvh`.
+
+    Parameters
+    ----------
+    text : str
+        The whole file.
+    source : str
+        Names the text in error messages and becomes ``Motion.source``.
+    name : str
+        ``Motion.name``.
+    """
+    lines = text.splitlines()  # \n, \r\n and \r alike, even mixed; keeps a last unterminated line
+    joints, motion_at = _parse_hierarchy(lines, source)
+    n_frames, frame_time, data_at = _parse_motion_header(lines, motion_at, source)
+    channels = tuple(j.channels for j in joints)
+    n_channels = sum(len(c) for c in channels)
+    values = _parse_frames(lines, data_at, n_frames, n_channels, source)
+    offsets = np.array([j.offset for j in joints], dtype=np.float64)
+    skeleton = Skeleton([j.name for j in joints], [j.parent for j in joints], offsets)
+    rotations, root_positions, translations = _pose_from_channels(values, channels, offsets)
+    return Motion(
+        skeleton=skeleton,
+        local_rotations=rotations,
+        root_positions=root_positions,
+        frame_time=frame_time,
+        channels=channels,
+        translations=translations,
+        name=name,
+        source=source,
+    )
+
+
+@dataclass
+class _Joint:
+    name: str
+    parent: int
+    line: int
+    end_site: bool = False
+    offset: tuple[float, float, float] | None = None
+    channels: tuple[str, ...] | None = None
+
+
+def _parse_hierarchy(lines: Sequence[str], source: str) -> tuple[list[_Joint], int]:
+    """The joints in file order and the index of the ``MOTION`` line."""
+
+    def fail(problem: str, at: int) -> BVHError:
+        return BVHError(problem, source, at + 1)
+
+    joints: list[_Joint] = []
+    names: set[str] = set()
+    stack: list[int] = []  # joints whose '{' is open
+    pending: int | None = None  # a joint waiting for its '{'
+    seen_header = False
+
+    def add_joint(name: str, parent: int, at: int, end_site: bool = False) -> int:
+        if name in names:
+            raise fail(f"duplicate joint name {name!r}", at)
+        names.add(name)
+        joints.append(_Joint(name, parent, at + 1, end_site, channels=() if end_site else None))
+        return len(joints) - 1
+
+    for at, line in enumerate(lines):
+        tokens = line.split()
+        k = 0
+        while k < len(tokens):
+            token, key = tokens[k], tokens[k].upper()
+            if pending is not None:
+                if token != "{":
+                    joint = joints[pending]
+                    raise fail(f"expected '{{' to open joint {joint.name!r}, found {token!r}", at)
+                stack.append(pending)
+                pending = None
+                k += 1
+            elif not seen_header:
+                if key != "HIERARCHY":
+                    raise fail(f"expected HIERARCHY at the start of the file, found {token!r}", at)
+                seen_header = True
+                k += 1
+            elif key == "MOTION":
+                if stack:
+                    raise fail(
+                        f"unbalanced braces: MOTION while joint {joints[stack[-1]].name!r} "
+                        f"(line {joints[stack[-1]].line}) is still open; a '}}' is missing",
+                        at,
+                    )
+                if not joints:
+                    raise fail("MOTION before any ROOT joint", at)
+                if len(tokens) > 1:
+                    raise fail(f"unexpected {' '.join(tokens[1:])!r} after MOTION", at)
+                return joints, at
+            elif key == "}":
+                if not stack:
+                    raise fail("unbalanced braces: '}' without a matching '{'", at)
+                joint = joints[stack.pop()]
+                if joint.offset is None:
+                    raise fail(f"joint {joint.name!r} has no OFFSET", at)
+                if joint.channels is None:
+                    joint.channels = ()
+                k += 1
+            elif key in ("ROOT", "JOINT"):
+                if key == "ROOT" and joints:
+                    raise fail("a second ROOT: only one skeleton per file is supported", at)
+                if key == "JOINT" and not stack:
+                    raise fail("JOINT outside any joint's braces", at)
+                parent = stack[-1] if stack else -1
+                if parent >= 0 and joints[parent].end_site:
+                    raise fail("an End Site cannot have child joints", at)
+                rest = tokens[k + 1 :]
+                opens = bool(rest) and rest[-1] == "{"
+                name = " ".join(rest[:-1] if opens else rest)
+                if not name:
+                    raise fail(f"{token} without a name", at)
+                pending = add_joint(name, parent, at)
+                k = len(tokens) - 1 if opens else len(tokens)
+            elif key == "END":
+                if k + 1 >= len(tokens) or tokens[k + 1].upper() != "SITE":
+                    raise fail(f"unknown keyword {token!r} (expected 'End Site')", at)
+                if not stack or joints[stack[-1]].end_site:
+                    raise fail("End Site outside a joint's braces", at)
+                parent_name = joints[stack[-1]].name
+                name, n = f"{parent_name}_end", 2
+                while name in names:  # a joint with several End Sites
+                    name, n = f"{parent_name}_end{n}", n + 1
+                pending = add_joint(name, stack[-1], at, end_site=True)
+                k += 2
+            elif key == "OFFSET":
+                joint = _open_joint(joints, stack, token, fail, at)
+                if joint.offset is not None:
+                    raise fail(f"a second OFFSET for joint {joint.name!r}", at)
+                joint.offset = _offset(tokens[k + 1 :], joint.name, fail, at)
+                k = len(tokens)
+            elif key == "CHANNELS":
+                joint = _open_joint(joints, stack, token, fail, at)
+                if joint.end_site:
+                    raise fail("an End Site has no CHANNELS", at)
+                if joint.channels is not None:
+                    raise fail(f"a second CHANNELS for joint {joint.name!r}", at)
+                joint.channels = _channels(tokens[k + 1 :], joint.name, fail, at)
+                k = len(tokens)
+            else:
+                inside = f" in joint {joints[stack[-1]].name!r}" if stack else ""
+                raise fail(f"unknown keyword {token!r}{inside}", at)
+
+    last = max(len(lines) - 1, 0)
+    if not seen_header:
+        raise fail("empty file: expected HIERARCHY", last)
+    if pending is not None or stack:
+        joint = joints[pending if pending is not None else stack[-1]]
+        raise fail(
+            f"unbalanced braces: the file ends while joint {joint.name!r} "
+            f"(line {joint.line}) is still open",
+            last,
+        )
+    if not joints:
+        raise fail("no ROOT joint", last)
+    raise fail("missing MOTION section after the HIERARCHY", last)
+
+
+def _open_joint(joints: list[_Joint], stack: list[int], keyword: str, fail, at: int) -> _Joint:
+    if not stack:
+        raise fail(f"{keyword} outside any joint's braces", at)
+    return joints[stack[-1]]
+
+
+def _offset(args: list[str], joint: str, fail, at: int) -> tuple[float, float, float]:
+    if len(args) != 3:
+        raise fail(f"OFFSET of joint {joint!r} needs 3 numbers, found {len(args)}", at)
+    try:
+        x, y, z = (float(a) for a in args)
+    except ValueError:
+        raise fail(
+            f"OFFSET of joint {joint!r} is not three numbers: {' '.join(args)!r}", at
+        ) from None
+    if not np.all(np.isfinite([x, y, z])):
+        raise fail(f"OFFSET of joint {joint!r} is not finite: {' '.join(args)!r}", at)
+    return x, y, z
+
+
+def _channels(args: list[str], joint: str, fail, at: int) -> tuple[str, ...]:
+    if not args:
+        raise fail(f"CHANNELS of joint {joint!r} needs a channel count", at)
+    try:
+        count = int(args[0])
+    except ValueError:
+        raise fail(
+            f"CHANNELS of joint {joint!r}: count {args[0]!r} is not a whole number", at
+        ) from None
+    names = args[1:]
+    if count != len(names):
+        raise fail(
+            f"CHANNELS of joint {joint!r} declares {count} channels but names {len(names)}", at
+        )
+    channels = []
+    for name in names:
+        channel = _CHANNEL_NAMES.get(name.upper())
+        if channel is None:
+            raise fail(
+                f"bad channel name {name!r} for joint {joint!r}; expected one of "
+                + ", ".join(_CHANNEL_NAMES.values()),
+                at,
+            )
+        if channel in channels:
+            raise fail(f"channel {channel} repeated for joint {joint!r}", at)
+        channels.append(channel)
+    return tuple(channels)
+
+
+def _parse_motion_header(
+    lines: Sequence[str], motion_at: int, source: str
+) -> tuple[int, float, int]:
+    """``Frames:`` and ``Frame Time:`` after MOTION; returns them and the first data line."""
+
+    def next_line(start: int, what: str) -> int:
+        at = start
+        while at < len(lines) and not lines[at].strip():
+            at += 1
+        if at == len(lines):
+            raise BVHError(f"missing {what} line after MOTION", source, len(lines))
+        return at
+
+    at = next_line(motion_at + 1, "'Frames:'")
+    match = _FRAMES.fullmatch(lines[at])
+    if match is None:
+        raise BVHError(f"expected 'Frames: <count>', found {lines[at].strip()!r}", source, at + 1)
+    try:
+        n_frames = int(match[1])
+    except ValueError:
+        n_frames = -1
+    if n_frames < 0:
+        raise BVHError(f"frame count {match[1]!r} is not a whole number", source, at + 1)
+
+    at = next_line(at + 1, "'Frame Time:'")
+    match = _FRAME_TIME.fullmatch(lines[at])
+    if match is None:
+        raise BVHError(
+            f"expected 'Frame Time: <seconds>', found {lines[at].strip()!r}", source, at + 1
+        )
+    try:
+        frame_time = float(match[1])
+    except ValueError:
+        frame_time = float("nan")
+    if not (np.isfinite(frame_time) and frame_time > 0):
+        raise BVHError(
+            f"Frame Time {match[1]!r} is not a positive number of seconds", source, at + 1
+        )
+    return n_frames, frame_time, at + 1
+
+
+def _parse_frames(
+    lines: Sequence[str], data_at: int, n_frames: int, n_channels: int, source: str
+) -> Array:
+    """The motion block as an (F, C) array.
+
+    The fast path hands the frame lines to numpy's C parser in one call; only when that fails
+    are the lines split in Python to find the first bad one and report its line number.
+    """
+    tail = lines[data_at:]
+    numbered = [i for i, line in enumerate(tail) if line and not line.isspace()]
+    if n_channels == 0:  # a static skeleton: frame lines are empty
+        return np.zeros((n_frames, 0))
+    if len(numbered) < n_frames:
+        raise BVHError(
+            f"fewer frame lines than declared: 'Frames:' says {n_frames}, "
+            f"the file ends after {len(numbered)}",
+            source,
+            len(lines),
+        )
+    if len(numbered) > n_frames:
+        warnings.warn(
+            f"{source}: more frame lines than declared: Frames: says {n_frames}, the file has "
+            f"{len(numbered)}; loading the first {n_frames}",
+            BVHWarning,
+            stacklevel=3,
+        )
+    rows = [tail[i] for i in numbered[:n_frames]]
+    line_numbers = [data_at + 1 + i for i in numbered[:n_frames]]  # 1-based
+    if n_frames == 0:
+        return np.zeros((0, n_channels))
+    try:
+        values = np.loadtxt(rows, dtype=np.float64, comments=None, ndmin=2)
+    except ValueError:
+        values = None
+    if values is None or values.shape != (n_frames, n_channels):
+        raise _frame_error(rows, line_numbers, n_channels, source)
+    finite = np.isfinite(values)
+    if not finite.all():
+        f, c = (int(i) for i in np.argwhere(~finite)[0])
+        token = rows[f].split()[c]
+        raise BVHError(f"frame {f}: {token!r} is not a finite number", source, line_numbers[f])
+    return values
+
+
+def _frame_error(
+    rows: Sequence[str], line_numbers: Sequence[int], n_channels: int, source: str
+) -> BVHError:
+    """The error for the first frame line numpy could not read."""
+    for f, row in enumerate(rows):
+        tokens = row.split()
+        if len(tokens) != n_channels:
+            return BVHError(
+                f"frame {f} has {len(tokens)} values, expected {n_channels} "
+                "(the number of channels in the HIERARCHY)",
+                source,
+                line_numbers[f],
+            )
+        for token in tokens:
+            try:
+                float(token)
+            except ValueError:
+                return BVHError(f"frame {f}: {token!r} is not a number", source, line_numbers[f])
+    return BVHError("the frame lines could not be read as numbers", source, line_numbers[0])
+
+
+def _pose_from_channels(
+    values: Array, channels: Sequence[tuple[str, ...]], offsets: Array
+) -> tuple[Array, Array, Array | None]:
+    """Local rotations (F, J, 4), root positions (F, 3) and, if any non-root joint has position
+    channels, per-frame bones (F, J, 3) from the channel values (F, C)."""
+    n_frames, n_joints = values.shape[0], len(channels)
+    # One extra zero column stands in for the axes a joint has no rotation channel for.
+    padded = np.concatenate([values, np.zeros((n_frames, 1))], axis=1)
+    zero_column = values.shape[1]
+    bones = np.repeat(offsets[None], n_frames, axis=0)  # a position channel replaces its axis
+    animated_bones = False
+    groups: dict[str, tuple[list[int], list[list[int]]]] = {}  # Euler order -> joints, columns
+    column = 0
+    for j, joint_channels in enumerate(channels):
+        rotation_columns = []
+        for channel in joint_channels:
+            if channel in POSITION_CHANNELS:
+                bones[:, j, "XYZ".index(channel[0])] = values[:, column]
+                animated_bones |= j > 0
+            else:
+                rotation_columns.append(column)
+            column += 1
+        order = euler_order(joint_channels)
+        if order is not None:
+            joints, columns = groups.setdefault(order, ([], []))
+            joints.append(j)
+            columns.append(rotation_columns + [zero_column] * (3 - len(rotation_columns)))
+
+    rotations = quat_identity((n_frames, n_joints))
+    for order, (joints, columns) in groups.items():
+        angles = padded[:, np.array(columns)]  # (F, G, 3), in the joint's channel order
+        rotations[:, joints] = quat_from_euler(angles, order, degrees=True)
+    root_positions = bones[:, 0].copy()
+    return rotations, root_positions, bones if animated_bones else None
+
+
+# -- writing -------------------------------------------------------------------------------
+
+
+def save_bvh(
+    motion: Motion,
+    path: str | os.PathLike[str],
+    orders: str | Mapping[str, str] | None = None,
+    *,
+    digits: int = 12,
+) -> None:
+    """Write ``motion`` as a BVH file (LF line endings, tabs); see :func:`format_bvh`."""
+    Path(path).write_text(format_bvh(motion, orders, digits=digits), encoding="utf-8", newline="\n")
+
+
+def format_bvh(
+    motion: Motion, orders: str | Mapping[str, str] | None = None, *, digits: int = 12
+) -> str:
+    """The text of a BVH file holding ``motion``.
+
+    Parameters
+    ----------
+    motion : Motion
+    orders : str or mapping of joint name to str, optional
+        Intrinsic Euler orders for the rotation channels (``"ZYX"`` writes ``Zrotation
+        Yrotation Xrotation``): one order for every joint that has rotation channels, or a
+        mapping for some joints. Default: each joint's channels as in ``motion.channels``.
+    digits : int
+        Significant digits per value; the default 12 keeps forward kinematics within 1e-9 of
+        the motion for clip-sized numbers.
+
+    Raises
+    ------
+    ValueError
+        If ``orders`` is not an intrinsic Tait-Bryan order (or names an unknown joint), or the
+        motion holds something its channels cannot carry (a rotation of a joint without
+        rotation channels, a bone that differs from its OFFSET without position channels).
+
+    Notes
+    -----
+    Joints are written depth first; for a skeleton not already in that order, the file (and a
+    motion loaded from it) lists the joints in a different order, with the same names.
+    """
+    if not isinstance(digits, int) or not 1 <= digits <= 17:
+        raise ValueError(f"digits: expected an integer from 1 to 17, got {digits!r}")
+    channels = _channels_with_orders(motion, orders)
+    columns = [_joint_values(motion, j, c) for j, c in enumerate(channels)]
+    order = _depth_first(motion.skeleton)
+    values = np.concatenate([columns[j] for j in order], axis=1)
+    return format_bvh_channels(
+        motion.skeleton, channels, values, motion.frame_time, fmt=f"%.{digits}g", order=order
+    )
+
+
+def format_bvh_channels(
+    skeleton: Skeleton,
+    channels: Sequence[Sequence[str]],
+    values: Array,
+    frame_time: float,
+    *,
+    fmt: str = "%.12g",
+    order: Sequence[int] | None = None,
+) -> str:
+    """The text of a BVH file from raw channel values (degrees and file units).
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        One root; leaves named ``"<Parent>_end"`` without channels are written as End Sites.
+    channels : sequence of tuple of str
+        Per joint, its channel names.
+    values : array_like, shape (F, C)
+        Channel values per frame, joints in depth-first order (``order``).
+    frame_time : float
+        Seconds per frame.
+    fmt : str
+        printf format of a number (offsets and channel values).
+    order : sequence of int, optional
+        The depth-first joint order of the file (computed when not given).
+    """
+    order = list(_depth_first(skeleton) if order is None else order)
+    values = np.asarray(values, dtype=np.float64)
+    n_channels = sum(len(channels[j]) for j in order)
+    if values.ndim != 2 or values.shape[1] != n_channels:
+        raise ValueError(f"values: expected shape (F, {n_channels}), got {values.shape}")
+    depth = {}
+    lines = ["HIERARCHY"]
+    open_blocks: list[int] = []
+    for j in order:
+        parent = int(skeleton.parents[j])
+        while open_blocks and open_blocks[-1] != parent:  # close finished subtrees
+            lines.append("\t" * depth[open_blocks.pop()] + "}")
+        depth[j] = depth[parent] + 1 if parent >= 0 else 0
+        tab = "\t" * depth[j]
+        end_site = is_end_site(skeleton, j) and not channels[j]
+        head = "ROOT " if parent < 0 else "End Site" if end_site else "JOINT "
+        lines.append(tab + head + ("" if end_site else skeleton.names[j]))
+        lines.append(tab + "{")
+        lines.append(tab + "\tOFFSET " + " ".join(fmt % v for v in skeleton.offsets[j]))
+        if not end_site:
+            lines.append(tab + f"\tCHANNELS {len(channels[j])} " + " ".join(channels[j]))
+        open_blocks.append(j)
+    while open_blocks:
+        lines.append("\t" * depth[open_blocks.pop()] + "}")
+    lines += ["MOTION", f"Frames: {values.shape[0]}", f"Frame Time: {float(frame_time)!r}"]
+    row = " ".join([fmt] * n_channels)
+    lines.extend(row % tuple(frame) for frame in values.tolist())
+    return "\n".join(lines) + "\n"
+
+
+def _depth_first(skeleton: Skeleton) -> list[int]:
+    """Joint indices in depth-first (BVH file) order from the root, joint 0; children in index
+    order."""
+    order, todo = [], [0]
+    while todo:
+        j = todo.pop()
+        order.append(j)
+        todo.extend(reversed(skeleton.children(j)))
+    return order
+
+
+def _channels_with_orders(
+    motion: Motion, orders: str | Mapping[str, str] | None
+) -> tuple[tuple[str, ...], ...]:
+    """``motion.channels`` with the rotation channels of the joints in ``orders`` replaced."""
+    names = motion.skeleton.names
+    if orders is None:
+        return motion.channels
+    if isinstance(orders, str):
+        wanted = {names[j]: orders for j, c in enumerate(motion.channels) if rotation_axes(c)}
+    elif isinstance(orders, Mapping):
+        wanted = dict(orders)
+        unknown = sorted(set(wanted) - set(names))
+        if unknown:
+            raise ValueError(f"orders: no joint named {', '.join(map(repr, unknown))}")
+    else:
+        raise ValueError(f"orders: expected a string or a mapping, got {type(orders).__name__}")
+    for name, order in wanted.items():
+        if not isinstance(order, str) or len(order) != 3 or set(order) != set("XYZ"):
+            hint = (
+                " (BVH rotation channels are intrinsic: use uppercase, e.g. 'ZYX' for extrinsic"
+                " 'xyz')"
+                if isinstance(order, str) and set(order) == set("xyz")
+                else ""
+            )
+            raise ValueError(
+                f"orders: {order!r} for joint {name!r} is not an intrinsic order of the three "
+                f"axes X, Y, Z{hint}"
+            )
+    channels = []
+    for name, joint_channels in zip(names, motion.channels, strict=True):
+        if name not in wanted:
+            channels.append(joint_channels)
+            continue
+        rotations = tuple(f"{axis}rotation" for axis in wanted[name])
+        kept = [c for c in joint_channels if c in POSITION_CHANNELS]
+        # The rotations go where they were (before or after the positions).
+        first = next((i for i, c in enumerate(joint_channels) if c in ROTATION_CHANNELS), None)
+        at = len(kept) if first is None else first
+        channels.append(tuple(kept[:at]) + rotations + tuple(kept[at:]))
+    return tuple(channels)
+
+
+def _joint_values(motion: Motion, j: int, channels: tuple[str, ...]) -> Array:
+    """Joint ``j``'s channel values (F, len(channels)): degrees and file units."""
+    name = motion.skeleton.names[j]
+    rotation = motion.local_rotations[:, j]
+    order = euler_order(channels)
+    if order is None:
+        if np.any(1.0 - np.abs(rotation[:, 0]) > 1e-12):
+            raise ValueError(
+                f"motion: joint {name!r} rotates but has no rotation channels; give it some "
+                "with orders={" + repr(name) + ": 'ZYX'}"
+            )
+        angles = np.zeros((motion.n_frames, 3))
+    else:
+        angles = euler_from_quat(rotation, order, degrees=True)
+        n_axes = len(rotation_axes(channels))
+        if n_axes < 3:
+            # Every rotation has a second Tait-Bryan triple, (a + 180, 180 - b, c + 180); a
+            # joint with two channels turned more than 90 degrees about its second axis needs
+            # that one, where the padded third angle is 0 instead of 180.
+            other = _wrap_degrees(angles + [180.0, 0.0, 180.0])
+            other[:, 1] = _wrap_degrees(180.0 - angles[:, 1])
+            flip = np.abs(angles[:, n_axes:]).max(axis=1) > np.abs(other[:, n_axes:]).max(axis=1)
+            angles[flip] = other[flip]
+        dropped = np.abs(angles[:, n_axes:])
+        if dropped.size and dropped.max() > _DROPPED_ANGLE_TOL:
+            raise ValueError(
+                f"motion: joint {name!r} rotates about axes its channels {channels} do not "
+                f"have ({dropped.max():.3g} degrees); pass orders to write all three"
+            )
+    if j == 0:
+        bones = motion.root_positions
+    elif motion.translations is not None:
+        bones = motion.translations[:, j]
+    else:
+        bones = np.broadcast_to(motion.skeleton.offsets[j], (motion.n_frames, 3))
+    offset = motion.skeleton.offsets[j]
+    for axis in range(3):
+        if f"{'XYZ'[axis]}position" not in channels and not np.allclose(
+            bones[:, axis], offset[axis], rtol=1e-12, atol=1e-9
+        ):
+            what = "root position" if j == 0 else "bone (translations)"
+            raise ValueError(
+                f"motion: the {what} of joint {name!r} moves along {'XYZ'[axis]} but the joint "
+                f"has no {'XYZ'[axis]}position channel"
+            )
+    columns = []
+    axes = order or ""
+    for channel in channels:
+        axis = "XYZ".index(channel[0])
+        if channel in POSITION_CHANNELS:
+            columns.append(bones[:, axis])
+        else:
+            columns.append(angles[:, axes.index(channel[0])])
+    return np.stack(columns, axis=1) if columns else np.zeros((motion.n_frames, 0))
+
+
+def _wrap_degrees(angles: Array) -> Array:
+    """Angles wrapped into [-180, 180)."""
+    return (np.asarray(angles) + 180.0) % 360.0 - 180.0

@@ -1,0 +1,271 @@
+r"""A motion clip: a skeleton and, per frame, its root position and local joint rotations.
+
+Frame :math:`t` of a :class:`Motion` is the pose of the lecture's forward kinematics,
+
+.. math::
+    Q_0 = R_0(t),\quad p_0 = \text{root\_positions}[t],\qquad
+    Q_i = Q_{p(i)} R_i(t),\quad p_i = p_{p(i)} + Q_{p(i)}\, l_i(t),
+
+where :math:`R_i(t)` = ``local_rotations[t, i]`` and the bone :math:`l_i(t)` is the joint's
+OFFSET, or ``translations[t, i]`` when the clip animates bone vectors too (BVH position
+channels on non-root joints).
+
+``channels`` records how each joint was animated in its BVH file (``("Zrotation",
+"Yrotation", "Xrotation")``, ...), so that saving writes the channels back in the same order.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .skeleton import Skeleton
+
+Array = NDArray[np.float64]
+
+POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
+ROTATION_CHANNELS = ("Xrotation", "Yrotation", "Zrotation")
+
+
+def rotation_axes(channels: Sequence[str]) -> str:
+    """The axes of a joint's rotation channels in file order: ``("Zrotation", "Xrotation")``
+    -> ``"ZX"``."""
+    return "".join(c[0] for c in channels if c in ROTATION_CHANNELS)
+
+
+def euler_order(channels: Sequence[str]) -> str | None:
+    """The intrinsic Euler order a joint's rotation channels spell, padded to three axes.
+
+    BVH rotation channels compose intrinsically in file order, so ``Zrotation Yrotation
+    Xrotation`` is ``"ZYX"`` (:math:`R = R_Z R_Y R_X`). A joint with fewer than three rotation
+    channels gets the missing axes appended (their angles are zero, so they change nothing):
+    ``"ZX"`` -> ``"ZXY"``. ``None`` when the joint has no rotation channel.
+    """
+    axes = rotation_axes(channels)
+    if not axes:
+        return None
+    return axes + "".join(a for a in "XYZ" if a not in axes)
+
+
+def default_channels(skeleton: Skeleton, order: str = "ZYX") -> tuple[tuple[str, ...], ...]:
+    """Channels for a motion built in code: the root positions and rotations, every other joint
+    rotations in ``order``; End Sites (leaves named ``"<Parent>_end"``) none."""
+    rotations = tuple(f"{axis}rotation" for axis in order)
+    channels = []
+    for j in range(skeleton.n_joints):
+        parent = int(skeleton.parents[j])
+        if parent < 0:
+            channels.append(POSITION_CHANNELS + rotations)
+        elif is_end_site(skeleton, j):
+            channels.append(())
+        else:
+            channels.append(rotations)
+    return tuple(channels)
+
+
+def is_end_site(skeleton: Skeleton, j: int) -> bool:
+    """Whether joint ``j`` is a BVH End Site: a leaf named after its parent with ``_end``."""
+    parent = int(skeleton.parents[j])
+    return (
+        parent >= 0
+        and not skeleton.children(j)
+        and skeleton.names[j].startswith(f"{skeleton.names[parent]}_end")
+    )
+
+
+@dataclass(eq=False)
+class Motion:
+    """A motion clip (one skeleton, ``F`` frames).
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        ``J`` joints, parent before child; End Sites are joints named ``"<Parent>_end"``.
+    local_rotations : array_like, shape (F, J, 4)
+        :math:`R_i(t)`, unit quaternions (w, x, y, z) relative to the parent joint.
+    root_positions : array_like, shape (F, 3)
+        :math:`p_0(t)`, the root joint's position.
+    frame_time : float
+        Seconds between frames (BVH ``Frame Time``).
+    channels : sequence of tuple of str, optional
+        Per joint, its BVH channel names in file order. Default: :func:`default_channels`.
+    translations : array_like, shape (F, J, 3), optional
+        Per-frame bones :math:`l_i(t)` for clips with position channels on non-root joints;
+        rows of joints without position channels equal their offsets (the root's row, unused
+        by forward kinematics, is its position). ``None`` (the usual case) means the bones
+        are the skeleton's constant offsets.
+    name : str
+        A short name for display (the file stem when loaded).
+    source : str, optional
+        Where the motion came from (the file path when loaded).
+    """
+
+    skeleton: Skeleton
+    local_rotations: Array
+    root_positions: Array
+    frame_time: float
+    channels: tuple[tuple[str, ...], ...] | None = None
+    translations: Array | None = None
+    name: str = ""
+    source: str | None = field(default=None)
+
+    def __post_init__(self) -> None:
+        n_joints = self.skeleton.n_joints
+        self.local_rotations = _float_array(self.local_rotations, "local_rotations", (n_joints, 4))
+        n_frames = self.local_rotations.shape[0]
+        self.root_positions = _float_array(self.root_positions, "root_positions", (3,))
+        if self.root_positions.shape[0] != n_frames:
+            raise ValueError(
+                f"root_positions: has {self.root_positions.shape[0]} frames, "
+                f"local_rotations has {n_frames}"
+            )
+        if self.translations is not None:
+            self.translations = _float_array(self.translations, "translations", (n_joints, 3))
+            if self.translations.shape[0] != n_frames:
+                raise ValueError(
+                    f"translations: has {self.translations.shape[0]} frames, "
+                    f"local_rotations has {n_frames}"
+                )
+        frame_time = float(self.frame_time)
+        if not np.isfinite(frame_time) or frame_time <= 0:
+            raise ValueError(f"frame_time: must be a positive number of seconds, got {frame_time}")
+        self.frame_time = frame_time
+        if self.channels is None:
+            self.channels = default_channels(self.skeleton)
+        self.channels = _checked_channels(self.channels, self.skeleton)
+
+    # -- size and timing --------------------------------------------------------------------
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames ``F``."""
+        return self.local_rotations.shape[0]
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints ``J`` (End Sites included)."""
+        return self.skeleton.n_joints
+
+    @property
+    def fps(self) -> float:
+        """Frames per second, ``1 / frame_time``."""
+        return 1.0 / self.frame_time
+
+    @property
+    def duration(self) -> float:
+        """Length of the clip in seconds, ``n_frames * frame_time``."""
+        return self.n_frames * self.frame_time
+
+    @property
+    def times(self) -> Array:
+        """Time of each frame in seconds, shape (F,)."""
+        return np.arange(self.n_frames) * self.frame_time
+
+    @property
+    def euler_orders(self) -> tuple[str | None, ...]:
+        """Per joint, the intrinsic Euler order of its rotation channels (:func:`euler_order`)."""
+        return tuple(euler_order(c) for c in self.channels)
+
+    def __len__(self) -> int:
+        return self.n_frames
+
+    # -- frames -----------------------------------------------------------------------------
+
+    def __getitem__(self, index: int | slice) -> Motion:
+        """``motion[i]``: a one-frame motion; ``motion[a:b:s]``: frames a..b-1 every s-th
+        (the frame time becomes ``|s| * frame_time``). Arrays are copied."""
+        if isinstance(index, slice):
+            frames = index
+            step = abs(index.step) if index.step is not None else 1
+        elif isinstance(index, (int, np.integer)):
+            i = int(index)
+            if not -self.n_frames <= i < self.n_frames:
+                raise IndexError(f"frame {i} is out of range for {self.n_frames} frames")
+            i %= self.n_frames
+            frames, step = slice(i, i + 1), 1
+        else:
+            raise TypeError(f"index: expected an int or a slice, got {type(index).__name__}")
+        if step == 0:
+            raise ValueError("index: slice step cannot be zero")
+        return Motion(
+            skeleton=self.skeleton,
+            local_rotations=self.local_rotations[frames].copy(),
+            root_positions=self.root_positions[frames].copy(),
+            frame_time=self.frame_time * step,
+            channels=self.channels,
+            translations=None if self.translations is None else self.translations[frames].copy(),
+            name=self.name,
+            source=self.source,
+        )
+
+    # -- kinematics -------------------------------------------------------------------------
+
+    def forward_kinematics(self) -> tuple[Array, Array]:
+        r"""Global joint positions and orientations of every frame.
+
+        :math:`Q_i = Q_{p(i)} R_i`, :math:`p_i = p_{p(i)} + Q_{p(i)} l_i`.
+
+        Returns
+        -------
+        positions : ndarray, shape (F, J, 3)
+        orientations : ndarray, shape (F, J, 4)
+        """
+        if self.translations is None:
+            return self.skeleton.forward_kinematics(self.local_rotations, self.root_positions)
+        from .fk import forward_kinematics
+
+        return forward_kinematics(
+            self.skeleton.parents,
+            self.translations,
+            self.local_rotations,
+            self.root_positions,
+            names=self.skeleton.names,
+        )
+
+    def __repr__(self) -> str:
+        label = f"{self.name!r}, " if self.name else ""
+        return (
+            f"Motion({label}{self.n_frames} frames at {self.fps:.4g} fps, "
+            f"{self.n_joints} joints, {self.duration:.3f} s)"
+        )
+
+
+def _float_array(x: ArrayLike, name: str, last: tuple[int, ...]) -> Array:
+    """``x`` as a finite float array of shape (F,) + ``last``."""
+    try:
+        a = np.array(x, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name}: expected numbers ({exc})") from None
+    if a.ndim != 1 + len(last) or a.shape[1:] != last:
+        want = "(F, " + ", ".join(map(str, last)) + ")"
+        raise ValueError(f"{name}: expected shape {want}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        frame = int(np.argwhere(~np.isfinite(a))[0][0])
+        raise ValueError(f"{name}: contains NaN or infinity (first in frame {frame})")
+    return a
+
+
+def _checked_channels(
+    channels: Sequence[Sequence[str]], skeleton: Skeleton
+) -> tuple[tuple[str, ...], ...]:
+    """Per-joint channel tuples, each a valid set of distinct BVH channel names."""
+    if isinstance(channels, str) or len(channels) != skeleton.n_joints:
+        raise ValueError(
+            f"channels: expected one tuple of channel names per joint ({skeleton.n_joints})"
+        )
+    checked = []
+    for j, joint in enumerate(channels):
+        joint = tuple(joint)
+        for c in joint:
+            if c not in POSITION_CHANNELS and c not in ROTATION_CHANNELS:
+                raise ValueError(
+                    f"channels: joint {skeleton.names[j]!r} has unknown channel {c!r}; "
+                    f"expected some of {', '.join(POSITION_CHANNELS + ROTATION_CHANNELS)}"
+                )
+        if len(set(joint)) != len(joint):
+            raise ValueError(f"channels: joint {skeleton.names[j]!r} repeats a channel: {joint}")
+        checked.append(joint)
+    return tuple(checked)
