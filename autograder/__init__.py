@@ -1,1 +1,52 @@
-"""Autograder."""
+"""Autograder: checks a student's implementation against the course's reference.
+
+Students::
+
+    python -m autograder check a1                 # a text report in the terminal
+    from autograder import check; check("a1")     # an HTML report in a notebook
+
+Instructors::
+
+    python -m autograder grade --assignment a1 SUBMISSIONS... --out DIR --jobs 2 --seed SECRET
+
+Student code runs only in a separate, limited interpreter (:mod:`autograder.sandbox`); all
+comparisons and scores are computed here. An assignment is a spec module plus data
+(:mod:`autograder.spec`, :mod:`autograder.assignments`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .runner import Result
+from .sandbox import DEFAULT_LIMITS, Limits
+
+__all__ = ["Limits", "Result", "check"]
+
+
+def check(assignment: str, submission: str | Path | None = None, *, seed: str | None = None,
+          limits: Limits = DEFAULT_LIMITS) -> Result:
+    """Check a submission of ``assignment`` (``"a1"``, ...) and return its :class:`Result`.
+
+    In a notebook the result shows as an HTML report (with a picture of the first failing
+    case); ``print(result)`` gives the text report.
+
+    Parameters
+    ----------
+    assignment : str
+        The assignment's key.
+    submission : str or Path, optional
+        A ``.py`` or ``.ipynb`` file; default: the assignment's template file in the current
+        directory, else in ``assignments/``.
+    seed : str, optional
+        The instructor's secret seed, which adds the hidden tests (default
+        ``$AUTOGRADER_SEED``; students have none and run the visible tests only).
+    """
+    from .assignments import load
+    from .runner import default_submission, run, seed_from_env
+
+    spec = load(assignment)
+    path = Path(submission) if submission is not None else default_submission(spec)
+    if not path.exists():
+        raise ValueError(f"submission: {path} does not exist")
+    return run(spec, path, seed_from_env(seed), limits)

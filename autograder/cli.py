@@ -1,0 +1,57 @@
+"""Command line: ``python -m autograder check a1`` and ``python -m autograder grade ...``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from .assignments import KEYS, load
+from .grading import collect, grade
+from .runner import default_submission, run, seed_from_env
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m autograder", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    c = sub.add_parser("check", help="check your own implementation (visible tests)")
+    c.add_argument("assignment", choices=KEYS)
+    c.add_argument("--submission", type=Path, help="a .py or .ipynb file (default: the "
+                   "template, e.g. assignments/a1_rotations.py)")
+    c.add_argument("--seed", help="instructors: the secret seed, to add the hidden tests")
+
+    g = sub.add_parser("grade", help="grade many submissions (instructors)")
+    g.add_argument("--assignment", required=True, choices=KEYS)
+    g.add_argument("submissions", nargs="+", type=Path, help=".py/.ipynb files or folders")
+    g.add_argument("--out", required=True, type=Path, help="folder for the results")
+    g.add_argument("--jobs", type=int, default=1, help="submissions graded at once")
+    g.add_argument("--seed", help="secret seed of the hidden tests (or $AUTOGRADER_SEED)")
+
+    args = parser.parse_args(argv)
+    spec = load(args.assignment)
+    seed = seed_from_env(args.seed)
+    if args.command == "check":
+        path = args.submission or default_submission(spec)
+        if not path.exists():
+            parser.error(f"submission: {path} does not exist")
+        result = run(spec, path, seed)
+        print(result)
+        return 0 if result.score == result.max_score else 1
+    try:
+        submissions = collect(args.submissions, spec.template)
+    except ValueError as exc:
+        parser.error(str(exc))
+    if not submissions:
+        parser.error("submissions: no .py or .ipynb files found")
+    if not seed:
+        print("warning: no --seed or $AUTOGRADER_SEED: grading the visible tests only",
+              file=sys.stderr)
+    start = time.monotonic()
+    rows = grade(spec, submissions, args.out, jobs=args.jobs, seed=seed)
+    mean = sum(r["score"] for r in rows) / len(rows)
+    print(f"graded {len(rows)} submissions in {time.monotonic() - start:.1f} s; mean score "
+          f"{mean:.2f} / {rows[0]['max_score']:g}; results in {args.out}/grades.csv",
+          file=sys.stderr)
+    return 0

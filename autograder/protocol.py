@@ -1,0 +1,169 @@
+"""The wire between the grader and the sandboxed child: length-prefixed JSON, never pickles.
+
+A frame is a 4-byte big-endian length and that many bytes of UTF-8 JSON. The child writes
+frames only to a dedicated pipe (not stdout), so whatever a submission prints is never
+mistaken for a result. Values cross as plain data:
+
+* grader to child, arguments: numbers, strings, and arrays as ``{"nd": [...], "shape": [...]}``;
+* child to grader, a returned value described by :func:`encode_value`, which the grader
+  turns back into a :class:`Value` with :func:`decode_value` and validates (the child is
+  untrusted: anything malformed is a :class:`ProtocolError`).
+
+This module is also loaded by the child (by path, standard library and numpy only).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import select
+import struct
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+MAX_FRAME = 8 << 20  # a single rotation's answer is tiny; this only bounds garbage
+MAX_ITEMS = 1 << 20  # numbers in one returned array
+_asarray = np.asarray  # bound now: a submission may monkeypatch numpy later
+
+
+class ProtocolError(Exception):
+    """The other side sent something that is not a well-formed frame or value."""
+
+
+# --- framing -------------------------------------------------------------------------------
+
+
+def write_frame(fd: int, obj: Any) -> None:
+    data = json.dumps(obj, separators=(",", ":")).encode()
+    view = memoryview(struct.pack(">I", len(data)) + data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def read_frame(fd: int, deadline: float | None = None) -> Any | None:
+    """Read one frame; None at end of file; ``TimeoutError`` past ``deadline`` (monotonic)."""
+    head = _read_exactly(fd, 4, deadline)
+    if head is None:
+        return None
+    (n,) = struct.unpack(">I", head)
+    if n > MAX_FRAME:
+        raise ProtocolError(f"frame of {n} bytes is too large")
+    body = _read_exactly(fd, n, deadline)
+    if body is None:
+        raise ProtocolError("stream ended inside a frame")
+    try:
+        return json.loads(body)
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ProtocolError(f"not JSON ({exc})") from None
+
+
+def _read_exactly(fd: int, n: int, deadline: float | None) -> bytes | None:
+    buf = bytearray()
+    while len(buf) < n:
+        if deadline is not None:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([fd], [], [], left)[0]:
+                raise TimeoutError
+        chunk = os.read(fd, n - len(buf))
+        if not chunk:
+            if buf:
+                raise ProtocolError("stream ended inside a frame")
+            return None
+        buf += chunk
+    return bytes(buf)
+
+
+# --- arguments (grader -> child) ------------------------------------------------------------
+
+
+def encode_args(args: tuple[Any, ...]) -> list[Any]:
+    return [
+        {"nd": a.ravel().tolist(), "shape": list(a.shape)} if isinstance(a, np.ndarray) else a
+        for a in args
+    ]
+
+
+def decode_args(args: list[Any]) -> list[Any]:
+    return [
+        _asarray(a["nd"], dtype=np.float64).reshape(a["shape"]) if isinstance(a, dict) else a
+        for a in args
+    ]
+
+
+# --- returned values (child -> grader) ------------------------------------------------------
+
+
+def encode_value(x: Any, depth: int = 0) -> dict[str, Any]:
+    """Describe what a student's function returned as plain JSON (runs in the child)."""
+    if x is None:
+        return {"kind": "none"}
+    if isinstance(x, (np.ndarray, np.generic, int, float)):
+        return _encode_array(_asarray(x), type(x).__name__)
+    if isinstance(x, (list, tuple)):
+        try:
+            a = _asarray(x)
+        except (ValueError, TypeError):
+            a = None
+        if a is not None and a.dtype.kind in "biuf":
+            return _encode_array(a, type(x).__name__)
+        if depth < 3 and len(x) <= 64:
+            return {"kind": "seq", "type": type(x).__name__,
+                    "items": [encode_value(i, depth + 1) for i in x]}
+    return {"kind": "other", "type": type(x).__name__}
+
+
+def _encode_array(a: np.ndarray, type_name: str) -> dict[str, Any]:
+    if a.dtype.kind not in "biuf":
+        return {"kind": "other", "type": f"{type_name} of dtype {a.dtype}"}
+    if a.size > MAX_ITEMS:
+        return {"kind": "other", "type": f"array of {a.size} numbers (too large)"}
+    return {"kind": "array", "type": type_name, "dtype": "bool" if a.dtype.kind == "b" else
+            str(a.dtype), "shape": list(a.shape), "data": a.astype(np.float64).ravel().tolist()}
+
+
+@dataclass(frozen=True)
+class Value:
+    """A returned value as the grader sees it.
+
+    ``kind`` is ``"array"`` (numbers; ``array`` holds them as float64 and ``dtype`` the
+    student's dtype), ``"seq"`` (a list/tuple of ``items`` that is not one array),
+    ``"none"``, or ``"other"`` (anything else; ``type_name`` says what).
+    """
+
+    kind: str
+    type_name: str = ""
+    array: np.ndarray | None = None
+    dtype: str = ""
+    items: tuple[Value, ...] = ()
+
+
+def decode_value(obj: Any) -> Value:
+    """Rebuild a :class:`Value` from the child's JSON, rejecting anything malformed."""
+    try:
+        kind = obj["kind"]
+        type_name = str(obj.get("type", ""))[:60]
+        if kind == "none":
+            return Value("none", "NoneType")
+        if kind == "other":
+            return Value("other", type_name or "object")
+        if kind == "seq":
+            items = obj["items"]
+            if not isinstance(items, list) or len(items) > 64:
+                raise ProtocolError("bad sequence")
+            return Value("seq", type_name, items=tuple(decode_value(i) for i in items))
+        if kind == "array":
+            shape = tuple(obj["shape"])
+            data = obj["data"]
+            if (len(shape) > 8 or not all(type(s) is int and s >= 0 for s in shape)
+                    or not isinstance(data, list) or len(data) != math.prod(shape)
+                    or not all(type(v) in (int, float) for v in data)):
+                raise ProtocolError("bad array")
+            arr = np.array(data, dtype=np.float64).reshape(shape)
+            return Value("array", type_name, arr, str(obj["dtype"])[:20])
+    except (KeyError, TypeError, AttributeError) as exc:
+        raise ProtocolError(f"malformed value ({exc})") from None
+    raise ProtocolError(f"unknown value kind {kind!r}")

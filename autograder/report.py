@@ -1,0 +1,163 @@
+"""Reports of a graded submission: text (terminal), HTML (notebook), Gradescope JSON, CSV.
+
+All of them say the same things, shortly: per test, the points, how many cases passed, the
+known mistake the failures match (with the lecture's formula), and the first failing case
+with its inputs, what came back and what was expected.
+"""
+
+from __future__ import annotations
+
+import csv
+import html as _html
+import textwrap
+from pathlib import Path
+from typing import Any
+
+from .runner import Result, TestResult, describe_args
+
+BADGE = {"passed": "PASS", "partial": "PART", "failed": "FAIL", "not_implemented": "TODO",
+         "not_run": "----"}
+COLOURS = {"passed": "#1a7f37", "partial": "#b35900", "failed": "#cf222e",
+           "not_implemented": "#6e7781", "not_run": "#6e7781"}
+
+
+def _points(x: float) -> str:
+    return f"{x:.2f}".rstrip("0").rstrip(".") if x != int(x) else f"{int(x)}"
+
+
+def test_lines(t: TestResult) -> list[str]:
+    """What a test's report says, one item per line (without the header)."""
+    if t.note:
+        return [t.note]
+    n = len(t.cases)
+    if t.status == "passed":
+        return [f"all {n} cases pass"]
+    if t.status == "not_implemented":
+        return ["not implemented yet"]
+    lines = [f"{t.n_passed} of {n} cases pass."]
+    if t.misconception:
+        m = t.misconception
+        lines.append(f"Likely mistake, {m.title}: {m.explanation}")
+    first = t.first_failure
+    assert first is not None
+    lines += [f"First failing case ({first.case.label}):",
+              f"  {t.function.name}({describe_args(t.function, first.case)})",
+              f"  {first.reason}"]
+    return lines
+
+
+def header(result: Result) -> list[str]:
+    a = result.assignment
+    lines = [f"{a.key} · {a.title} · {result.submission}"]
+    if not result.hidden_run:
+        lines.append("Visible tests only: hidden tests run when your instructor grades "
+                     "(with a secret seed).")
+    lines += [f"Refused: {p}" for p in result.problems]
+    if result.isolation == "plain":
+        lines.append("(No Linux namespaces here: the sandbox still limits time, memory, files "
+                     "and imports.)")
+    return lines
+
+
+def text(result: Result, width: int = 100) -> str:
+    """The terminal report."""
+    out = header(result) + [""]
+    name_w = max((len(t.test.name) for t in result.tests), default=10)
+    for t in result.tests:
+        score = f"{_points(t.score)}/{_points(t.test.points)}"
+        out.append(f"  {BADGE[t.status]}  {t.test.name:<{name_w}}  {score:>7}")
+        if t.status == "passed":
+            continue
+        lines = test_lines(t)
+        if len(lines) == 1 and len(lines[0]) < 60:
+            out[-1] += f"   {lines[0]}"
+            continue
+        for line in lines:
+            indent = " " * (8 + len(line) - len(line.lstrip()))
+            out += textwrap.wrap(line.strip(), width, initial_indent=indent,
+                                 subsequent_indent=indent + "  ")
+    scope = "all tests" if result.hidden_run else "visible tests"
+    out += ["", f"Score: {_points(result.score)} / {_points(result.max_score)} ({scope}), "
+                f"checked in {result.elapsed:.1f} s"]
+    if result.output.strip():
+        shown = result.output.strip().splitlines()[:8]
+        out += ["", "Your code printed (the grader ignores it):"] + [f"  | {s}" for s in shown]
+    return "\n".join(out)
+
+
+def html(result: Result) -> str:
+    """The notebook report, with a picture of the first failing rotation."""
+    esc = _html.escape
+    rows = []
+    for t in result.tests:
+        colour = COLOURS[t.status]
+        detail = "" if t.status == "passed" else "<br>".join(esc(s) for s in test_lines(t))
+        rows.append(
+            f"<tr><td style='color:{colour};font-weight:bold'>{BADGE[t.status]}</td>"
+            f"<td>{esc(t.test.name)}</td><td style='text-align:right'>"
+            f"{_points(t.score)}/{_points(t.test.points)}</td>"
+            f"<td style='text-align:left;font-size:90%'>{detail}</td></tr>")
+    head = "<br>".join(esc(s) for s in header(result))
+    scope = "all tests" if result.hidden_run else "visible tests"
+    picture = ""
+    from .figures import first_failure_png
+
+    png = first_failure_png(result)
+    if png:
+        picture = (f"<p>{esc(png[0])}</p><img src='data:image/png;base64,{png[1]}' "
+                   "style='max-width:560px'>")
+    return (
+        f"<div><p>{head}</p><table><tr><th></th><th>test</th><th>points</th><th>why</th></tr>"
+        + "".join(rows)
+        + f"</table><p><b>Score: {_points(result.score)} / {_points(result.max_score)}</b> "
+        f"({scope})</p>{picture}</div>"
+    )
+
+
+def gradescope(result: Result) -> dict[str, Any]:
+    """The submission's ``results.json`` in Gradescope's autograder format."""
+    tests = []
+    for t in result.tests:
+        tests.append({
+            "name": t.test.name,
+            "score": round(t.score, 4),
+            "max_score": t.test.points,
+            "status": "passed" if t.status == "passed" else "failed",
+            "output": "\n".join(test_lines(t)),
+            "visibility": "after_published" if t.test.hidden else "visible",
+        })
+    return {
+        "score": round(result.score, 4),
+        "execution_time": round(result.elapsed, 3),
+        "output": "\n".join(header(result)[1:]) or "Graded.",
+        "visibility": "visible",
+        "stdout_visibility": "hidden",
+        "tests": tests,
+    }
+
+
+CSV_FIXED = ["submission", "score", "max_score", "status", "misconceptions", "seconds"]
+
+
+def csv_header(result: Result) -> list[str]:
+    return CSV_FIXED + [t.test.name for t in result.tests]
+
+
+def csv_row(name: str, result: Result) -> dict[str, Any]:
+    status = "refused" if result.problems else "graded"
+    found = sorted({f"{t.test.function}:{t.misconception.key}" for t in result.tests
+                    if t.misconception})
+    row: dict[str, Any] = {
+        "submission": name, "score": round(result.score, 4), "max_score": result.max_score,
+        "status": status, "misconceptions": " ".join(found),
+        "seconds": round(result.elapsed, 2),
+    }
+    row.update({t.test.name: round(t.score, 4) for t in result.tests})
+    return row
+
+
+def write_csv(path: Path, header_: list[str], rows: list[dict[str, Any]]) -> None:
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=header_, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)

@@ -1,0 +1,264 @@
+"""Grade one submission: static check, sandboxed calls, validation, comparison, diagnosis.
+
+Everything that decides a score happens here, in the grading process, on plain arrays the
+sandbox sent back; the submission only ever sees its inputs.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .checks import show
+from .sandbox import DEFAULT_LIMITS, Limits, Outcome, Sandbox, isolation
+from .spec import Assignment, Case, Function, Misconception, Test, case_rng
+from .submission import SubmissionError, import_problems, read_source
+
+ASSIGNMENTS_DIR = Path(__file__).resolve().parents[1] / "assignments"
+
+
+@dataclass
+class CaseResult:
+    """One case: passed or not, why not (one line), and the output if it had the right shape.
+
+    ``kind`` is ``"pass"``, ``"wrong"`` (a valid answer that differs), ``"invalid"`` (wrong
+    type, shape, NaN...), ``"error"``, ``"not_implemented"``, ``"timeout"``, ``"crash"``,
+    ``"garbage"`` or ``"skipped"``.
+    """
+
+    case: Case
+    kind: str
+    reason: str = ""
+    got: Any = None
+    expected: Any = None
+
+    @property
+    def passed(self) -> bool:
+        return self.kind == "pass"
+
+
+@dataclass
+class TestResult:
+    """A test's cases, its score (points times the fraction passed) and its diagnosis."""
+
+    test: Test
+    function: Function
+    cases: list[CaseResult] = field(default_factory=list)
+    misconception: Misconception | None = None
+    note: str = ""  # why the test did not run at all (rejected, missing function, ...)
+
+    @property
+    def n_passed(self) -> int:
+        return sum(c.passed for c in self.cases)
+
+    @property
+    def score(self) -> float:
+        return self.test.points * self.n_passed / len(self.cases) if self.cases else 0.0
+
+    @property
+    def status(self) -> str:
+        if self.note or not self.cases:
+            return "not_run"
+        if self.n_passed == len(self.cases):
+            return "passed"
+        if all(c.kind == "not_implemented" for c in self.cases):
+            return "not_implemented"
+        return "partial" if self.n_passed else "failed"
+
+    @property
+    def first_failure(self) -> CaseResult | None:
+        return next((c for c in self.cases if not c.passed), None)
+
+
+@dataclass
+class Result:
+    """The outcome of grading one submission."""
+
+    assignment: Assignment
+    submission: Path
+    tests: list[TestResult]
+    hidden_run: bool
+    problems: list[str] = field(default_factory=list)
+    output: str = ""
+    elapsed: float = 0.0
+    isolation: str = ""
+
+    @property
+    def score(self) -> float:
+        return sum(t.score for t in self.tests)
+
+    @property
+    def max_score(self) -> float:
+        return sum(t.test.points for t in self.tests)
+
+    def __str__(self) -> str:
+        from .report import text
+
+        return text(self)
+
+    def _repr_html_(self) -> str:
+        from .report import html
+
+        return html(self)
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A test with its cases and the reference's answers, computed once per seed."""
+
+    test: Test
+    cases: tuple[Case, ...]
+    expected: tuple[Any, ...]
+
+
+@lru_cache(maxsize=16)
+def prepare(assignment: Assignment, seed: str | None) -> tuple[Prepared, ...]:
+    """The tests to run: all visible ones, and the hidden ones when there is a seed."""
+    out = []
+    for test in assignment.tests:
+        if test.hidden and not seed:
+            continue
+        fn = assignment.function(test.function)
+        cases = tuple(test.cases(case_rng(test, seed)))
+        out.append(Prepared(test, cases, tuple(fn.reference(*c.args) for c in cases)))
+    return tuple(out)
+
+
+def default_submission(assignment: Assignment) -> Path:
+    """The template file in the current directory if there is one, else in ``assignments/``."""
+    here = Path.cwd() / assignment.template
+    return here if here.exists() else ASSIGNMENTS_DIR / assignment.template
+
+
+def run(assignment: Assignment, submission: Path, seed: str | None = None,
+        limits: Limits = DEFAULT_LIMITS) -> Result:
+    """Grade ``submission`` (a ``.py`` or ``.ipynb``) against ``assignment``."""
+    start = time.monotonic()
+    seed = seed or None
+    prepared = prepare(assignment, seed)
+    tests = [TestResult(p.test, assignment.function(p.test.function)) for p in prepared]
+    result = Result(assignment, submission, tests, hidden_run=seed is not None,
+                    isolation=isolation())
+    try:
+        source = read_source(submission)
+        result.problems = import_problems(source, assignment.allowed_imports, submission.name)
+    except SubmissionError as exc:
+        result.problems = [str(exc)]
+    if result.problems:
+        _skip_all(result, "not run: the submission was refused (see above)")
+    else:
+        _run_tests(assignment, source, prepared, result, limits)
+    result.elapsed = time.monotonic() - start
+    return result
+
+
+def _skip_all(result: Result, note: str) -> None:
+    for t in result.tests:
+        t.note = note
+
+
+def _run_tests(assignment: Assignment, source: str, prepared: tuple[Prepared, ...],
+               result: Result, limits: Limits) -> None:
+    names = [f.name for f in assignment.functions]
+    with Sandbox(source, names, limits, assignment.allowed_imports) as sandbox:
+        started = sandbox.start()
+        if started.status != "ok":
+            why = _error_text(started.error) if started.status == "error" else started.message
+            result.problems = [f"your file could not be loaded: {why}"]
+            _skip_all(result, "not run: the file could not be loaded (see above)")
+            return
+        for p, tr in zip(prepared, result.tests, strict=True):
+            fn = tr.function
+            if fn.name in sandbox.missing:
+                tr.note = f"{assignment.template} has no function {fn.name}()"
+                continue
+            outcomes = sandbox.call(fn.name, [c.args for c in p.cases])
+            if any(o.status == "garbage" for o in outcomes):
+                # Frames that are not the child's own void the test: none of it can be trusted.
+                forged = next(o for o in outcomes if o.status == "garbage")
+                outcomes = [forged] * len(outcomes)
+            tr.cases = [_judge(fn, c, e, o, limits) for c, e, o in
+                        zip(p.cases, p.expected, outcomes, strict=True)]
+            tr.misconception = diagnose(assignment, fn, tr.cases)
+        result.output = sandbox.output()
+
+
+def _judge(fn: Function, case: Case, expected: Any, out: Outcome, limits: Limits) -> CaseResult:
+    if out.status == "ok":
+        assert out.value is not None
+        v = fn.check.validate(fn.name, out.value)
+        if v.error:
+            return CaseResult(case, "invalid", v.error, v.array, expected)
+        why = fn.check.compare(v.array, expected)
+        if why is None:
+            return CaseResult(case, "pass", got=v.array, expected=expected)
+        got = fn.check.show_value(v.array)
+        return CaseResult(case, "wrong", f"{fn.name} returned {got}, expected "
+                          f"{fn.check.show_expected(expected)}: {why}", v.array, expected)
+    if out.status == "error":
+        if out.error.get("type") == "NotImplementedError":
+            return CaseResult(case, "not_implemented", "not implemented yet", None, expected)
+        text = _error_text(out.error)
+        if out.error.get("type") == "MemoryError":
+            text += f" (the memory limit is {limits.memory_mb} MB)"
+        return CaseResult(case, "error", f"{fn.name} raised {text}", None, expected)
+    if out.status == "skipped":
+        return CaseResult(case, "skipped", "not run: an earlier case stopped the interpreter",
+                          None, expected)
+    return CaseResult(case, out.status, out.message, None, expected)
+
+
+def _error_text(error: dict[str, Any]) -> str:
+    text = error.get("type", "Exception")
+    if error.get("message"):
+        text += f": {error['message']}"
+    where = error.get("where")
+    if where:
+        text += f" (line {where['line']}: {where['code'].strip()})"
+    return text
+
+
+def diagnose(assignment: Assignment, fn: Function,
+             cases: list[CaseResult]) -> Misconception | None:
+    """The first catalogued mistake that reproduces every failing case of a test, if any.
+
+    Only outputs of the right shape can be compared; a test with an exception, a timeout or
+    a wrong shape among its failures gets no diagnosis.
+    """
+    failing = [c for c in cases if not c.passed]
+    if not failing or any(c.got is None for c in failing):
+        return None
+    for m in assignment.misconceptions_of(fn.name):
+        if all(_reproduces(m, fn, c) for c in failing):
+            return m
+    return None
+
+
+def _reproduces(m: Misconception, fn: Function, c: CaseResult) -> bool:
+    try:
+        with np.errstate(all="ignore"):
+            wrong = m.wrong(*c.case.args)
+    except Exception:  # a variant undefined on this input reproduces nothing
+        return False
+    return fn.check.close(c.got, wrong)
+
+
+def seed_from_env(seed: str | None) -> str | None:
+    """``seed`` if given, else ``$AUTOGRADER_SEED`` (empty counts as none)."""
+    return seed or os.environ.get("AUTOGRADER_SEED") or None
+
+
+def describe_args(fn: Function, case: Case) -> str:
+    """``R = [[...]], t = 0.25`` for messages."""
+    parts = []
+    for name, a in zip(fn.params, case.args, strict=True):
+        text = show(a) if isinstance(a, np.ndarray) else f"{a:.4g}" if isinstance(a, float) else (
+            repr(a))
+        parts.append(f"{name} = {text}")
+    return ", ".join(parts)

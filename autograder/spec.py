@@ -1,0 +1,112 @@
+"""What an assignment is, as data: functions, tests with case generators, known mistakes.
+
+An assignment module (``autograder/assignments/a1.py``) builds one :class:`Assignment`:
+
+* a :class:`Function` per function the student writes, with its reference implementation
+  and a :class:`~autograder.checks.Check` that validates and compares its output;
+* :class:`Test` s, each a named group of cases worth some points (partial credit is the
+  fraction of cases passed); a test's ``cases(rng)`` builds its inputs, from a fixed seed
+  for visible tests and from the instructor's secret seed for hidden ones;
+* a catalogue of :class:`Misconception` s: each a known-wrong variant of one function,
+  written as a function of the reference, which the diagnosis compares failing outputs to.
+
+Nothing here runs student code; the runner does, in a sandbox.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .checks import Check
+
+
+@dataclass(frozen=True)
+class Case:
+    """One call: positional ``args`` (arrays, floats, strings) and a short human ``label``."""
+
+    label: str
+    args: tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class Function:
+    """A function the student implements.
+
+    ``params`` are the argument names, in order (for messages); ``reference`` computes the
+    expected output from the same arguments; ``check`` validates and compares outputs.
+    """
+
+    name: str
+    params: tuple[str, ...]
+    reference: Callable[..., Any]
+    check: Check
+
+
+@dataclass(frozen=True)
+class Test:
+    """A named group of cases of one function, worth ``points``.
+
+    ``hidden`` tests draw their cases from the secret seed and are shown to students only
+    after grades are published.
+    """
+
+    name: str
+    function: str
+    points: float
+    cases: Callable[[np.random.Generator], Sequence[Case]]
+    hidden: bool = False
+
+
+@dataclass(frozen=True)
+class Misconception:
+    """A known-wrong way to implement ``function``.
+
+    ``wrong`` takes the same arguments as the function and returns what the mistaken
+    implementation would; ``explanation`` is one sentence with the lecture's formula.
+    """
+
+    key: str
+    function: str
+    title: str
+    explanation: str
+    wrong: Callable[..., Any]
+
+
+@dataclass(frozen=True)
+class Assignment:
+    """An assignment: its template file, functions, tests, allowed imports and catalogue."""
+
+    key: str
+    title: str
+    template: str
+    functions: tuple[Function, ...]
+    tests: tuple[Test, ...]
+    misconceptions: tuple[Misconception, ...] = ()
+    allowed_imports: frozenset[str] = field(default_factory=lambda: frozenset({"numpy"}))
+
+    def function(self, name: str) -> Function:
+        for f in self.functions:
+            if f.name == name:
+                return f
+        raise KeyError(name)
+
+    def misconceptions_of(self, name: str) -> tuple[Misconception, ...]:
+        return tuple(m for m in self.misconceptions if m.function == name)
+
+
+def case_rng(test: Test, seed: str | None) -> np.random.Generator:
+    """The generator of a test's cases: fixed for visible tests, from ``seed`` for hidden ones.
+
+    Hashing the test name in keeps each test's cases independent of the others, so adding
+    a test does not change the cases of existing ones.
+    """
+    if test.hidden and not seed:
+        raise ValueError(f"test {test.name!r} is hidden and needs the secret seed")
+    material = f"{test.name}\0{seed if test.hidden else 'visible'}".encode()
+    digest = hashlib.sha256(material).digest()
+    return np.random.default_rng(list(np.frombuffer(digest, dtype=np.uint32)))

@@ -1,0 +1,186 @@
+"""The autograder's parts: wire protocol, checks, notebook extraction, seeds, reports, CLI."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from autograder import Limits, check
+from autograder.assignments import load
+from autograder.checks import MatrixCheck, QuatCheck, TupleCheck
+from autograder.cli import main
+from autograder.protocol import (
+    ProtocolError,
+    Value,
+    decode_value,
+    encode_value,
+    read_frame,
+    write_frame,
+)
+from autograder.report import gradescope
+from autograder.spec import case_rng
+from autograder.submission import import_problems, source_from_notebook
+
+FIXTURES = Path(__file__).parent / "fixtures" / "a1"
+LIMITS = Limits(cpu_seconds=5, memory_mb=600, case_timeout=0.5)
+A1 = load("a1")
+
+
+def test_frames_round_trip_and_garbage_is_refused():
+    r, w = os.pipe()
+    write_frame(w, {"a": [1.5, float("nan")]})
+    os.write(w, b"\x00\x00\x00\x03abc")
+    os.close(w)
+    first = read_frame(r, deadline=None)
+    assert first["a"][0] == 1.5 and np.isnan(first["a"][1])
+    with pytest.raises(ProtocolError, match="not JSON"):
+        read_frame(r)
+    assert read_frame(r) is None
+    os.close(r)
+
+
+def test_returned_values_are_described_as_plain_data():
+    v = decode_value(json.loads(json.dumps(encode_value(np.arange(4, dtype=np.int32)))))
+    assert v.kind == "array" and v.dtype == "int32" and v.array.dtype == np.float64
+    assert decode_value(encode_value([1.0, 2.0])).type_name == "list"
+    assert decode_value(encode_value((np.zeros(3), np.zeros(4)))).kind == "seq"
+    assert decode_value(encode_value(object())).kind == "other"
+    assert decode_value(encode_value(np.zeros(2, dtype=complex))).kind == "other"
+    for bad in ({"kind": "array", "shape": [2], "data": [1.0], "dtype": "f"},
+                {"kind": "array", "shape": [1], "data": ["x"], "dtype": "f"},
+                {"kind": "zip"}, [], {"kind": "seq", "items": 3}):
+        with pytest.raises(ProtocolError):
+            decode_value(bad)
+
+
+def _arr(x) -> Value:
+    return decode_value(encode_value(np.asarray(x, dtype=float)))
+
+
+def test_quaternions_compare_up_to_sign_and_must_be_unit():
+    c, q = QuatCheck(), np.array([0.5, 0.5, 0.5, 0.5])
+    assert c.compare(-q, q) is None
+    assert "not a unit quaternion (|q| = 2)" in c.compare(2 * q, q)
+    assert "different rotation" in c.compare(np.array([1.0, 0, 0, 0]), q)
+    assert c.validate("f", _arr(np.zeros(3))).error == "f returned shape (3,), expected (4,)"
+    assert "returned None" in c.validate("f", decode_value(encode_value(None))).error
+    nan = c.validate("f", _arr([np.nan, 0, 0, 1]))
+    assert nan.array is not None and "NaN or infinity" in nan.error
+    assert c.close(np.array([np.nan, 1, 0, 0]), np.array([np.nan, -1, 0, 0]))
+
+
+def test_tuple_check_validates_each_item():
+    c = TupleCheck((MatrixCheck(), QuatCheck()), ("matrix", "quaternion"))
+    good = decode_value(encode_value((np.eye(3), np.array([1.0, 0, 0, 0]))))
+    v = c.validate("fk", good)
+    assert v.error is None and c.compare(v.array, (np.eye(3), -np.array([1.0, 0, 0, 0]))) is None
+    bad = decode_value(encode_value((np.eye(3), np.zeros(3))))
+    assert c.validate("fk", bad).error == "fk's quaternion returned shape (3,), expected (4,)"
+    assert "expected a tuple (matrix, quaternion)" in c.validate("fk", _arr(np.eye(3))).error
+
+
+def test_notebook_keeps_definitions_and_drops_display_code():
+    cells = [
+        {"cell_type": "markdown", "source": "# a1"},
+        {"cell_type": "code", "source": ["%matplotlib inline\n", "import numpy as np\n",
+                                         "import matplotlib.pyplot as plt\n", "EPS = 1e-9\n",
+                                         "!pip install scipy\n"]},
+        {"cell_type": "code", "source": "def quat_mul(a, b):\n    return a\n\nquat_mul(1, 2)\n"
+                                        "fig = plt.figure()\n"},
+        {"cell_type": "code", "source": "from autograder import check\ncheck('a1')"},
+        {"cell_type": "code", "source": "%%timeit\nthis is not python"},
+    ]
+    src = source_from_notebook(json.dumps({"cells": cells}))
+    assert "import numpy as np" in src and "EPS = 1e-9" in src and "def quat_mul" in src
+    for gone in ("matplotlib", "pip", "check(", "plt.figure", "quat_mul(1, 2)", "timeit"):
+        assert gone not in src
+    compile(src, "nb", "exec")
+
+
+def test_static_check_names_the_line_and_the_reason():
+    problems = import_problems("import numpy\nimport math\nfrom scipy.spatial import transform"
+                               "\nimport subprocess\n", frozenset({"numpy"}), "s.py")
+    assert problems == [
+        "line 3: `from scipy.spatial import ...` is not allowed: the assignment asks you to "
+        "implement the math yourself with numpy",
+        "line 4: `import subprocess` is not allowed: use numpy and the Python standard "
+        "library only",
+    ]
+    assert import_problems("def f(:\n", frozenset(), "s.py")[0].startswith("line 1:")
+
+
+def test_hidden_cases_depend_on_the_secret_seed_only():
+    hidden = next(t for t in A1.tests if t.hidden)
+    visible = next(t for t in A1.tests if not t.hidden)
+    first = [c.args[0] for c in hidden.cases(case_rng(hidden, "s1"))]
+    again = [c.args[0] for c in hidden.cases(case_rng(hidden, "s1"))]
+    other = [c.args[0] for c in hidden.cases(case_rng(hidden, "s2"))]
+    assert np.array_equal(first, again) and not np.array_equal(first, other)
+    assert np.array_equal(visible.cases(case_rng(visible, "s1"))[0].args[0],
+                          visible.cases(case_rng(visible, None))[0].args[0])
+    with pytest.raises(ValueError, match="secret seed"):
+        case_rng(hidden, None)
+
+
+def test_every_misconception_is_distinguishable_from_the_reference():
+    for m in A1.misconceptions:
+        fn = A1.function(m.function)
+        tests = [t for t in A1.tests if t.function == m.function and not t.hidden]
+        cases = [c for t in tests for c in t.cases(case_rng(t, None))]
+        with np.errstate(all="ignore"):
+            differs = [not fn.check.close(np.asarray(m.wrong(*c.args), dtype=float),
+                                          fn.reference(*c.args)) for c in cases]
+        assert any(differs), m.key
+
+
+def test_gradescope_json_hides_hidden_tests_until_published(tmp_path):
+    src = (FIXTURES / "reference.py").read_text() + (FIXTURES / "mutant_mul_reversed.py"
+                                                     ).read_text()
+    (tmp_path / "s.py").write_text(src)
+    result = check("a1", tmp_path / "s.py", seed="k", limits=LIMITS)
+    data = gradescope(result)
+    assert data["stdout_visibility"] == "hidden" and data["execution_time"] >= 0
+    assert {t["visibility"] for t in data["tests"] if "hidden" in t["name"]} == {"after_published"}
+    mul = [t for t in data["tests"] if t["name"].startswith("quat_mul")]
+    assert all("the product in the wrong order" in t["output"] for t in mul)
+    assert data["score"] == pytest.approx(sum(t["score"] for t in data["tests"]))
+
+
+def test_html_report_pictures_the_first_failing_rotation(tmp_path):
+    src = (FIXTURES / "reference.py").read_text() + (FIXTURES / "mutant_euler_extrinsic.py"
+                                                     ).read_text()
+    (tmp_path / "s.py").write_text(src)
+    page = check("a1", tmp_path / "s.py", limits=LIMITS)._repr_html_()
+    assert "data:image/png;base64," in page and "extrinsic instead of intrinsic" in page
+
+
+def test_grade_a_class_in_parallel(tmp_path, capsys):
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    ref = (FIXTURES / "reference.py").read_text()
+    (subs / "alice.py").write_text(ref)
+    nb = {"cells": [{"cell_type": "code", "source": ref + "\ncheck('a1')\n"}]}
+    (subs / "bob.ipynb").write_text(json.dumps(nb))
+    (subs / "carol.py").write_text("def quat_mul(a, b):\n  return (\n")  # a syntax error
+    (subs / "dave").mkdir()
+    (subs / "dave" / "a1_rotations.py").write_text(ref + (FIXTURES / "adv_exits.py").read_text())
+    out = tmp_path / "out"
+    assert main(["grade", "--assignment", "a1", str(subs), "--out", str(out), "--jobs", "2",
+                 "--seed", "class-secret"]) == 0
+    rows = {r["submission"]: r for r in csv.DictReader(open(out / "grades.csv"))}
+    assert {k: float(r["score"]) for k, r in rows.items()} == {
+        "alice": 24, "bob": 24, "carol": 0, "dave": 12}
+    assert rows["carol"]["status"] == "refused"
+    results = json.loads((out / "dave" / "results.json").read_text())
+    assert results["score"] == 12 and len(results["tests"]) == 18
+    assert "graded 4 submissions" in capsys.readouterr().err
+
+
+def test_check_command_prints_the_report(capsys):
+    assert main(["check", "a1", "--submission", str(FIXTURES / "reference.py")]) == 0
+    assert "Score: 12 / 12 (visible tests)" in capsys.readouterr().out
