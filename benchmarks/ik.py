@@ -1,0 +1,114 @@
+"""Speed of course.ik against ikpy on a 7-joint chain, and batched throughput.
+
+The chain: 7 unit bones along +x, hinge axes alternating y, z, y, z, y, z, y (so targets fill
+3D). 200 seeded targets are the end positions of random joint angles in [-1.5, 1.5] (all
+reachable), every solve starts from the zero pose, tolerance 1e-4. FABRIK and CCD are
+measured on the same targets with *ball* joints (FABRIK is a ball-joint method; on this hinge
+chain it converges only slowly, see the last table). ikpy solves the same hinge chain built
+from URDFLinks, timed in the same run. Run: ``.venv/bin/python benchmarks/ik.py``.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+
+from course.ik import fabrik_batch, solve
+from course.rotations import quat_from_axis_angle
+from course.skeleton import chain
+
+AXES = np.array([[0, 1, 0], [0, 0, 1]] * 3 + [[0, 1, 0]], float)
+HINGE = chain([1.0] * 7, axes=AXES)
+BALL = chain([1.0] * 7)
+IDENT = np.tile([1.0, 0, 0, 0], (8, 1))
+TOL = 1e-4
+
+
+def targets(n: int, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    q = np.tile(IDENT, (n, 1, 1))
+    q[:, :7] = quat_from_axis_angle(AXES, rng.uniform(-1.5, 1.5, (n, 7)))
+    return HINGE.forward_kinematics(q)[0][:, -1]
+
+
+def ikpy_chain():
+    from ikpy.chain import Chain
+    from ikpy.link import OriginLink, URDFLink
+
+    links = [OriginLink()]
+    for i, axis in enumerate(AXES):
+        links.append(URDFLink(name=f"j{i}", origin_translation=[0.0 if i == 0 else 1.0, 0, 0],
+                              origin_orientation=[0, 0, 0], rotation=axis))
+    links.append(URDFLink(name="end", origin_translation=[1.0, 0, 0],
+                          origin_orientation=[0, 0, 0], joint_type="fixed"))
+    return Chain(links, active_links_mask=[False] + [True] * 7 + [False])
+
+
+def time_ikpy(ts: np.ndarray) -> tuple[np.ndarray, float]:
+    c = ikpy_chain()
+    times, ok = [], 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for t in ts:
+            t0 = time.perf_counter()
+            q = c.inverse_kinematics(t)
+            times.append(time.perf_counter() - t0)
+            ok += np.linalg.norm(c.forward_kinematics(q)[:3, 3] - t) < TOL
+    return np.array(times), ok / len(ts)
+
+
+def time_method(method: str, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    sk = BALL if method in ("fabrik", "ccd") else HINGE
+    solve(sk, IDENT, np.zeros(3), {"end_effector": ts[0]}, method=method)  # warm the cache
+    times, its, ok = [], [], 0
+    for t in ts:
+        t0 = time.perf_counter()
+        r = solve(sk, IDENT, np.zeros(3), {"end_effector": t}, method=method, tol=TOL)
+        times.append(time.perf_counter() - t0)
+        its.append(r.iterations)
+        ok += r.converged
+    return np.array(times), np.array(its), ok / len(ts)
+
+
+def main() -> None:
+    ts = targets(200)
+    ik_times, ik_ok = time_ikpy(ts[:50])
+    ikpy_ms = np.median(ik_times) * 1e3
+    print(f"ikpy {np.median(ik_times)*1e3:.2f} ms median per solve (50 targets), "
+          f"success {ik_ok:.0%} at {TOL}\n")
+    print(f"{'method':20s} {'joints':6s} {'median ms':>9s} {'p90 ms':>7s} {'iters':>6s} "
+          f"{'success':>8s} {'x ikpy':>7s}")
+    for method in ("dls", "pseudo_inverse", "jacobian_transpose", "ccd", "fabrik"):
+        n = 60 if method in ("jacobian_transpose", "ccd") else 200
+        tm, its, ok = time_method(method, ts[:n])
+        joints = "ball" if method in ("fabrik", "ccd") else "hinge"
+        med = np.median(tm) * 1e3
+        print(f"{method:20s} {joints:6s} {med:9.3f} {np.percentile(tm, 90)*1e3:7.3f} "
+              f"{np.median(its):6.0f} {ok:8.0%} {ikpy_ms / med:7.1f}")
+
+    B = 10_000
+    big = targets(B, seed=1)
+    p0 = BALL.rest_positions()
+    t0 = time.perf_counter()
+    _, its, err = fabrik_batch(p0, big, tol=TOL)
+    dt = time.perf_counter() - t0
+    print(f"\nbatched over {B} targets:")
+    print(f"  fabrik_batch (positions)    {B/dt:10.0f} solves/s, success {(err < TOL).mean():.1%}")
+    for method, sk in (("fabrik", BALL), ("dls", HINGE)):
+        t0 = time.perf_counter()
+        r = solve(sk, IDENT, np.zeros(3), {"end_effector": big}, method=method, tol=TOL)
+        dt = time.perf_counter() - t0
+        print(f"  solve {method:6s} ({'ball' if sk is BALL else 'hinge'}) poses  "
+              f"{B/dt:10.0f} solves/s, success {r.converged.mean():.1%}, "
+              f"median iterations {np.median(r.iterations):.0f}")
+
+    r = solve(HINGE, IDENT, np.zeros(3), {"end_effector": ts[:50]}, method="fabrik", tol=TOL,
+              max_iter=200)
+    print(f"\nFABRIK with hinge constraints on the hinge chain (50 targets, 200 iterations): "
+          f"success {r.converged.mean():.0%}, median final error {np.median(r.error):.2g}")
+
+
+if __name__ == "__main__":
+    main()

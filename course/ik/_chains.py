@@ -1,0 +1,543 @@
+r"""The part of a skeleton an IK solve moves: the joints on the paths from the fixed joint to the
+end effectors, re-rooted at the fixed joint, with the lecture's forward kinematics on it.
+
+Re-rooting at joint ``k`` (the lecture's "root at the foot") walks each path edge either *down*
+the original tree (``p -> c``) or *up* it (``c -> p``):
+
+.. math::
+    \text{down:}\quad Q_c = Q_p R_c,\qquad p_c = p_p + Q_p l_c \\
+    \text{up:}\quad Q_p = Q_c R_c^{-1},\qquad p_p = p_c - Q_p l_c
+
+Every path node ``u`` other than the fixed joint is *driven* by one local rotation (its *edge
+rotation*): ``R_u`` going down, ``R_c`` (the rotation of the child it came from) going up. So
+the variables of the solve are exactly those local rotations; going down the rotation turns
+the subtree about ``p_u`` itself, going up about the node it came from, ``p_c``.
+
+What stays fixed at ``k``: if every effector lies below ``k`` the *parent frame* of ``k`` is
+fixed and ``R_k`` is a variable (for ``k = 0`` the world frame: the usual chain IK where the
+base joint turns); otherwise ``k``'s own global orientation ``Q_k`` is held (the planted foot)
+and ``R_k`` drives the way up.
+
+Ball joints get three columns per joint: the increment is a rotation vector
+:math:`\delta = (\delta_x, \delta_y, \delta_z)` about the *world* axes applied to the driven
+node's global orientation, :math:`Q_u \leftarrow \exp([\delta]_\times) Q_u`, so the column for
+world axis :math:`a` is :math:`a \times (e - r_i)` (no Euler gimbal lock). Hinge joints get one
+column :math:`a_i \times (e - r_i)` with :math:`a_i` the hinge axis in world space (the axis is
+fixed in the parent's frame, :math:`a_i = Q_{parent} \hat a`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..fk import tree_path
+from ._small import (
+    TINY,
+    best_rotation,
+    cross,
+    dot,
+    matvec,
+    norm,
+    orthonormalize,
+    rotvec_matrix,
+    rotvec_of,
+    twist_angle,
+)
+
+Array = NDArray[np.float64]
+
+
+@dataclass
+class ChainModel:
+    """Path joints re-rooted at the fixed joint; see the module docstring.
+
+    Node arrays have one entry per path joint in traversal order (node 0 is the fixed joint);
+    column arrays one entry per Jacobian column.
+    """
+
+    joints: NDArray[np.int_]  # (N,) skeleton joint of each node
+    parent: NDArray[np.int_]  # (N,) re-rooted parent node, -1 for node 0
+    up: NDArray[np.bool_]  # (N,) edge walked up the original tree
+    edge_joint: NDArray[np.int_]  # (N,) joint whose local rotation drives the node (-1: none)
+    bone: Array  # (N, 3) the offset l of the node's edge (zero for node 0)
+    anchor_parent: bool  # parent frame of the fixed joint held (else Q_k held)
+    effectors: NDArray[np.int_]  # (E,) effector nodes
+    rot_effectors: NDArray[np.int_]  # (E_r,) nodes with an orientation target
+    var_nodes: NDArray[np.int_]  # (V,) driven node of each variable
+    var_sign: Array  # (V,) +1 down, -1 up
+    var_frame: NDArray[np.int_]  # (V,) node whose orientation holds the joint axis (N: base)
+    var_pivot: NDArray[np.int_]  # (V,) node the variable turns about
+    hinge: NDArray[np.bool_]  # (V,) one column (hinge) or three (ball)
+    col_var: NDArray[np.int_]  # (C,)
+    col_axis: Array  # (C, 3) axis in the frame of col_frame
+    col_frame: NDArray[np.int_]  # (C,) node index, N = base frame, N + 1 = world
+    pos_mask: Array  # (E, C) 1 where effector position depends on the column
+    rot_mask: Array  # (E_r, C)
+    levels: list[NDArray[np.int_]] = field(repr=False)
+    ancestors: Array = field(repr=False)  # (N, N) 1 where w is on the path to u (w != 0)
+    descendant: NDArray[np.bool_] = field(repr=False)  # (N, N) [d, u]: u at or below d
+    # For fitting rotations to wanted positions: the nodes whose offsets from the pivot a
+    # node's orientation M_u fixes, as M_u @ fit_local (padded with node 0, weight 0).
+    fit_nodes: NDArray[np.int_] = field(repr=False)  # (N, K)
+    fit_local: Array = field(repr=False)  # (N, K, 3)
+    fit_weight: Array = field(repr=False)  # (N, K)
+    pivot: NDArray[np.int_] = field(repr=False)  # (N,) node each node's edge turns about
+
+    def __post_init__(self) -> None:
+        self.any_up = bool(self.up.any())
+        # Levels are contiguous runs of nodes (sorted by depth); index them by slices and a
+        # single parent where possible, which is much cheaper than fancy indexing.
+        self.level_slices = []
+        for lvl in self.levels[1:]:
+            nodes = slice(int(lvl[0]), int(lvl[-1]) + 1)
+            par = self.parent[lvl]
+            single = np.all(par == par[0])
+            self.level_slices.append((nodes, slice(par[0], par[0] + 1) if single else par))
+        # The path's bones can at most line up (sum of lengths); at least, the longest bone
+        # less all the others (0 if they can cover it).
+        lengths = norm(self.bone)
+        on_path = self.descendant[:, self.effectors].T  # (E, N) nodes on each effector's path
+        self.reach_far = on_path @ lengths
+        longest = (on_path * lengths).max(axis=1, initial=0.0)
+        self.reach_near = np.maximum(0.0, 2 * longest - self.reach_far)
+        hinge_cols = self.hinge[self.col_var]
+        self.hinge_vars = np.flatnonzero(self.hinge)
+        self.ball_vars = np.flatnonzero(~self.hinge)
+        self.hinge_cols = np.flatnonzero(hinge_cols)
+        self.ball_cols = np.flatnonzero(~hinge_cols)  # three consecutive per ball variable
+        K = np.zeros((len(self.hinge_vars), 3, 3))
+        a = self.col_axis[self.hinge_cols]
+        K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -a[:, 2], a[:, 1], -a[:, 0]
+        self.hinge_K = K - np.swapaxes(K, -1, -2)  # [a]_x, for Rodrigues with a fixed axis
+        self.hinge_K2 = self.hinge_K @ self.hinge_K
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.joints)
+
+    @property
+    def n_cols(self) -> int:
+        return len(self.col_var)
+
+    # -- forward kinematics on the path -------------------------------------------------------
+
+    def forward(self, Rn: Array, base: Array, p0: Array) -> tuple[Array, Array]:
+        r"""Global orientations and positions of the path nodes.
+
+        Parameters
+        ----------
+        Rn : ndarray, shape (B, N, 3, 3)
+            Edge rotation of every node (identity where ``edge_joint`` is -1).
+        base : ndarray, shape (B, 3, 3)
+            Held frame: the parent frame of the fixed joint, or ``Q_k`` itself.
+        p0 : ndarray, shape (B, 3)
+            Position of the fixed joint.
+
+        Returns
+        -------
+        M : ndarray, shape (B, N, 3, 3)
+        p : ndarray, shape (B, N, 3)
+        """
+        if self.any_up:
+            F = Rn.copy()
+            F[:, self.up] = np.swapaxes(Rn[:, self.up], -1, -2)
+            # Offsets in the re-rooted parent's frame: l (down) or -R_c^{-1} l_c (up).
+            G = np.broadcast_to(self.bone, Rn.shape[:2] + (3,)).copy()
+            G[:, self.up] = -matvec(F[:, self.up], G[:, self.up])
+        else:
+            F, G = Rn, self.bone
+        # Node-major storage makes each level's product one contiguous batched matmul.
+        Ft = np.ascontiguousarray(np.moveaxis(F, 1, 0))
+        Mt = np.empty_like(Ft)
+        np.matmul(base, Ft[0], out=Mt[0])
+        for nodes, par in self.level_slices:
+            Mt[nodes] = Mt[par] @ Ft[nodes]
+        M = np.moveaxis(Mt, 0, 1)
+        D = matvec(M[:, self.parent[1:]], G[..., 1:, :])
+        p = p0[:, None, :] + self.ancestors[:, 1:] @ D
+        return M, p
+
+    # -- Jacobian --------------------------------------------------------------------------------
+
+    def world_axes(self, M: Array, base: Array) -> Array:
+        r"""World axis of every column, shape (B, C, 3): :math:`Q_{parent}\,\hat a` for a hinge,
+        the coordinate axes for a ball."""
+        B = M.shape[0]
+        w = np.empty((B, self.n_cols, 3))
+        if len(self.hinge_cols):
+            frames = np.concatenate([M, base[:, None]], 1)[:, self.col_frame[self.hinge_cols]]
+            w[:, self.hinge_cols] = matvec(frames, self.col_axis[self.hinge_cols])
+        w[:, self.ball_cols] = self.col_axis[self.ball_cols]
+        return w
+
+    def jacobian(self, M: Array, p: Array, base: Array) -> Array:
+        r"""Analytic Jacobian, rows: 3 per effector position then 3 per orientation target.
+
+        Column for world axis :math:`a` of the variable turning about :math:`r_i`:
+        :math:`\partial e / \partial\theta = a \times (e - r_i)` for a position,
+        :math:`a` for an orientation (angular velocity).
+
+        Returns
+        -------
+        ndarray, shape (B, 3 E + 3 E_r, C)
+        """
+        w = self.world_axes(M, base)
+        r = p[:, self.effectors][:, :, None, :] - p[:, self.var_pivot[self.col_var]][:, None]
+        Jp = cross(w[:, None], r) * self.pos_mask[None, :, :, None]  # (B, E, C, 3)
+        B = M.shape[0]
+        Jp = np.swapaxes(Jp, -1, -2).reshape(B, -1, self.n_cols)
+        if len(self.rot_effectors):
+            Jr = w[:, None] * self.rot_mask[None, :, :, None]
+            Jp = np.concatenate([Jp, np.swapaxes(Jr, -1, -2).reshape(B, -1, self.n_cols)], 1)
+        return Jp
+
+    def step(self, Rn: Array, M: Array, base: Array, delta: Array) -> Array:
+        r"""Apply the increments ``delta`` (B, C) to the edge rotations.
+
+        A world-space turn of the driven node by the rotation vector :math:`\delta` is the
+        local update :math:`R \leftarrow \exp(s\,[F^{-1}\delta]_\times)\,R`, with :math:`F`
+        the frame the joint's axes live in (its original parent) and :math:`s = -1` going up.
+        A hinge turned by :math:`\delta` about its world axis :math:`F\hat a` is
+        :math:`R \leftarrow \exp(s\delta[\hat a]_\times) R` (Rodrigues with the fixed
+        :math:`[\hat a]_\times`).
+        """
+        out = Rn.copy()
+        if len(self.hinge_vars):
+            nodes = self.var_nodes[self.hinge_vars]
+            th = (delta[:, self.hinge_cols] * self.var_sign[self.hinge_vars])[..., None, None]
+            turn = np.eye(3) + np.sin(th) * self.hinge_K + (1.0 - np.cos(th)) * self.hinge_K2
+            out[:, nodes] = turn @ Rn[:, nodes]
+        if len(self.ball_vars):
+            nodes = self.var_nodes[self.ball_vars]
+            frames = np.concatenate([M, base[:, None]], 1)[:, self.var_frame[self.ball_vars]]
+            world = delta[:, self.ball_cols].reshape(len(delta), -1, 3)
+            local = matvec(np.swapaxes(frames, -1, -2), world) * self.var_sign[self.ball_vars,
+                                                                                None]
+            out[:, nodes] = rotvec_matrix(local) @ Rn[:, nodes]
+        return out
+
+
+def build_model(
+    parents: NDArray[np.int_],
+    offsets: Array,
+    hinge_axes: list[Array | None],
+    root: int,
+    effectors: list[int],
+    rot_effectors: list[int] = (),
+) -> ChainModel:
+    """Build the :class:`ChainModel` of the paths from ``root`` to ``effectors``.
+
+    Parameters
+    ----------
+    parents : int ndarray, shape (J,)
+    offsets : ndarray, shape (J, 3)
+    hinge_axes : list of (3,) unit vectors, None or False, length J
+        Hinge axis of each joint in its parent's frame; None for a ball joint (and a
+        universal joint, solved as a ball); False for a fixed joint (never a variable).
+    root : int
+        The fixed joint.
+    effectors, rot_effectors : list of int
+        Joints with a position target, and (a subset or others) with an orientation target.
+    """
+    parents = np.asarray(parents)
+    order: dict[int, int] = {root: -1}  # joint -> re-rooted parent joint
+    for e in list(effectors) + list(rot_effectors):
+        path = tree_path(parents, root, e)
+        for a, b in zip(path[:-1], path[1:], strict=True):
+            order.setdefault(b, a)
+    depth = {root: 0}
+    for j in sorted(order, key=lambda j: len(tree_path(parents, root, j))):
+        if j != root:
+            depth[j] = depth[order[j]] + 1
+    joints = np.array(sorted(order, key=lambda j: (depth[j], j)), dtype=int)
+    node = {int(j): i for i, j in enumerate(joints)}
+    N = len(joints)
+    parent = np.array([node[order[j]] if order[j] >= 0 else -1 for j in joints], dtype=int)
+    up = np.array([order[j] >= 0 and parents[order[j]] == j for j in joints], dtype=bool)
+    anchor_parent = not up.any()
+    edge_joint = np.empty(N, dtype=int)
+    bone = np.zeros((N, 3))
+    for i, j in enumerate(joints):
+        if i == 0:
+            edge_joint[i] = root if anchor_parent else -1
+        elif up[i]:
+            edge_joint[i] = order[j]
+            bone[i] = offsets[order[j]]
+        else:
+            edge_joint[i] = j
+            bone[i] = offsets[j]
+
+    descendant = np.zeros((N, N), dtype=bool)
+    ancestors = np.zeros((N, N))
+    for u in range(N):
+        w = u
+        while w >= 0:
+            descendant[w, u] = True
+            if w > 0:
+                ancestors[u, w] = 1.0
+            w = parent[w]
+
+    eff = np.array([node[e] for e in effectors], dtype=int)
+    reff = np.array([node[e] for e in rot_effectors], dtype=int)
+
+    # A variable matters if it moves an effector: going down it turns the nodes strictly
+    # below it about itself; going up it moves the node itself (about the node it came from).
+    var_nodes, var_sign, var_frame, var_pivot, hinge = [], [], [], [], []
+    col_var, col_axis, col_frame = [], [], []
+    for u in range(N):
+        if edge_joint[u] < 0 or hinge_axes[edge_joint[u]] is False:
+            continue
+        below = descendant[u].copy()
+        if not up[u]:
+            below[u] = False
+        if not (below[eff].any() or descendant[u, reff].any()):
+            continue
+        v = len(var_nodes)
+        var_nodes.append(u)
+        var_sign.append(-1.0 if up[u] else 1.0)
+        frame = u if up[u] else (parent[u] if u > 0 else N)
+        var_frame.append(frame)
+        var_pivot.append(parent[u] if up[u] else u)
+        axis = hinge_axes[edge_joint[u]]
+        hinge.append(axis is not None)
+        if axis is not None:
+            col_var.append(v)
+            col_axis.append(np.asarray(axis, dtype=float))
+            col_frame.append(frame)
+        else:
+            for a in np.eye(3):
+                col_var.append(v)
+                col_axis.append(a)
+                col_frame.append(N + 1)
+    var_nodes_a = np.array(var_nodes, dtype=int)
+    col_var_a = np.array(col_var, dtype=int)
+    driven = var_nodes_a[col_var_a] if len(col_var_a) else np.zeros(0, dtype=int)
+    pos_mask = np.zeros((len(eff), len(col_var)))
+    for i, e in enumerate(eff):
+        for c, d in enumerate(driven):
+            pos_mask[i, c] = descendant[d, e] and (up[d] or d != e)
+    rot_mask = np.array([[float(descendant[d, e]) for d in driven] for e in reff]).reshape(
+        len(reff), len(driven))
+
+    # Down node u: its down children c sit at M_u l_c from u. Up node u: u itself at
+    # -M_u l_u from the node it came from, and its down children c at M_u (l_c - l_u).
+    fits = []
+    for u in range(N):
+        kids = [c for c in range(1, N) if parent[c] == u and not up[c]]
+        if up[u]:
+            fits.append([(u, -bone[u])] + [(c, bone[c] - bone[u]) for c in kids])
+        else:
+            fits.append([(c, bone[c]) for c in kids])
+    K = max(1, max(len(f) for f in fits))
+    fit_nodes = np.zeros((N, K), dtype=int)
+    fit_local = np.zeros((N, K, 3))
+    fit_weight = np.zeros((N, K))
+    for u, f in enumerate(fits):
+        for i, (c, vec) in enumerate(f):
+            fit_nodes[u, i], fit_local[u, i], fit_weight[u, i] = c, vec, 1.0
+    pivot = np.array([parent[u] if up[u] else u for u in range(N)], dtype=int)
+
+    levels = [np.flatnonzero(np.array([depth[int(j)] for j in joints]) == k)
+              for k in range(max(depth.values()) + 1)]
+    return ChainModel(
+        joints=joints, parent=parent, up=up, edge_joint=edge_joint, bone=bone,
+        anchor_parent=anchor_parent, effectors=eff, rot_effectors=reff,
+        var_nodes=var_nodes_a, var_sign=np.array(var_sign), var_frame=np.array(var_frame, int),
+        var_pivot=np.array(var_pivot, dtype=int), hinge=np.array(hinge, dtype=bool),
+        col_var=col_var_a, col_axis=np.array(col_axis).reshape(-1, 3),
+        col_frame=np.array(col_frame, dtype=int), pos_mask=pos_mask, rot_mask=rot_mask,
+        levels=levels, ancestors=ancestors, descendant=descendant,
+        fit_nodes=fit_nodes, fit_local=fit_local, fit_weight=fit_weight, pivot=pivot,
+    )
+
+
+@dataclass
+class Problem:
+    """One model with a batch of ``B`` starting poses and targets, ready to iterate.
+
+    Attributes
+    ----------
+    Rn : ndarray, shape (B, N, 3, 3)
+        Edge rotations of the nodes (the variables live at ``model.var_nodes``).
+    base, p0 : ndarray, shapes (B, 3, 3), (B, 3)
+        Held frame and position of the fixed joint.
+    target_pos : ndarray, shape (B, E, 3)
+    target_rot : ndarray, shape (B, E_r, 3, 3)
+    col_weight : ndarray, shape (C,)
+        The regulariser's per-column weight ``W`` (1: normal, larger: the joint moves less).
+    hinge_limits : ndarray, shape (V, 2)
+        Hinge angle range ``[lo, hi]`` of each variable (``±inf`` when free or a ball).
+    ball_limit : ndarray, shape (V,)
+        Largest rotation angle of a ball joint's local rotation (``inf`` when free).
+    """
+
+    model: ChainModel
+    Rn: Array
+    base: Array
+    p0: Array
+    target_pos: Array
+    target_rot: Array
+    col_weight: Array
+    hinge_limits: Array
+    ball_limit: Array
+
+    @property
+    def batch(self) -> int:
+        return self.Rn.shape[0]
+
+    def forward(self, Rn: Array) -> tuple[Array, Array]:
+        return self.model.forward(Rn, self.base, self.p0)
+
+    def error(self, M: Array, p: Array) -> tuple[Array, Array]:
+        r"""Error vector :math:`\Delta e` (B, 3E + 3E_r) and the largest effector error (B,).
+
+        Orientation errors are the world rotation vector of :math:`Q_t Q^{-1}` (radians).
+        """
+        m = self.model
+        e = self.target_pos - p[:, m.effectors]
+        size = norm(e)
+        if len(m.rot_effectors):
+            r = rotvec_of(self.target_rot @ np.swapaxes(M[:, m.rot_effectors], -1, -2))
+            e = np.concatenate([e, r], 1)
+            size = np.concatenate([size, norm(r)], 1)
+        return e.reshape(self.batch, -1), size.max(axis=1)
+
+    def reach(self) -> tuple[Array, Array]:
+        """Largest and smallest distance from the fixed joint each effector can be, (E,) each."""
+        return self.model.reach_far, self.model.reach_near
+
+    def unreachable(self) -> NDArray[np.bool_]:
+        """(B,) some position target lies outside the shell its effector can reach."""
+        far, near = self.reach()
+        d = norm(self.target_pos - self.p0[:, None])
+        slack = 1e-9 * max(float(far.max()), 1.0)
+        return ((d > far + slack) | (d < near - slack)).any(axis=1)
+
+    def project(self, Rn: Array) -> Array:
+        """Edge rotations with every variable projected into its limits."""
+        m = self.model
+        if not (np.isfinite(self.hinge_limits).any() or np.isfinite(self.ball_limit).any()):
+            return Rn
+        Rn = Rn.copy()
+        Rn[:, m.var_nodes] = self._limit(Rn[:, m.var_nodes], np.arange(len(m.var_nodes)))
+        return Rn
+
+    def fit(self, Rn: Array, wanted: Array) -> Array:
+        r"""Edge rotations that put the path nodes as close as possible to ``wanted`` positions.
+
+        Walks the levels from the fixed joint out. At each node the orientation carried over
+        from its parent, :math:`M_u = M_{parent} F_u`, is turned about the node's pivot by the
+        rotation that best maps the current offsets of the nodes it places onto the wanted
+        ones: the shortest arc for one offset (so the bone keeps its previous twist), Kabsch
+        for several (a branching joint), or the turn about the hinge axis for a hinge.
+        Hinge ranges and ball limits are enforced on the way, so later levels see the
+        constrained pose.
+
+        Parameters
+        ----------
+        Rn : ndarray, shape (B, N, 3, 3)
+        wanted : ndarray, shape (B, N, 3)
+
+        Returns
+        -------
+        ndarray, shape (B, N, 3, 3)
+            New edge rotations; a node that places nothing keeps its own.
+        """
+        m = self.model
+        B = Rn.shape[0]
+        var_of = np.full(m.n_nodes, -1)
+        var_of[m.var_nodes] = np.arange(len(m.var_nodes))
+        up = m.up
+        F = Rn.copy()
+        F[:, up] = np.swapaxes(Rn[:, up], -1, -2)
+        M = np.empty_like(Rn)
+        p = np.empty((B, m.n_nodes, 3))
+        p[:, 0] = self.p0
+        for k, lvl in enumerate(m.levels):
+            if k == 0:
+                Mpar = self.base[:, None]
+            else:
+                Mpar = M[:, m.parent[lvl]]
+                G = np.broadcast_to(m.bone[lvl], (B, len(lvl), 3))
+                p[:, lvl] = p[:, m.parent[lvl]] + matvec(Mpar, G)  # down nodes: final already
+            Mc = Mpar @ F[:, lvl]
+            sel = var_of[lvl] >= 0
+            if sel.any():
+                nodes, v = lvl[sel], var_of[lvl[sel]]
+                Mv = Mc[:, sel]
+                cur = matvec(Mv[:, :, None], m.fit_local[nodes])  # (B, n, K, 3)
+                want = wanted[:, m.fit_nodes[nodes]] - p[:, m.pivot[nodes]][:, :, None]
+                wt = m.fit_weight[nodes]
+                R = best_rotation(cur, want, wt)
+                hinge = m.hinge[v]
+                if hinge.any():
+                    frame = np.where(up[nodes][:, None, None], Mv, Mpar[:, sel])
+                    axis = matvec(frame, self._axes()[v])  # (B, n, 3)
+                    a = axis[:, :, None]
+                    c = cross(cur - dot(cur, a)[..., None] * a, want - dot(want, a)[..., None] * a)
+                    num = (dot(a, c) * wt).sum(-1)
+                    den = (dot(cur - dot(cur, a)[..., None] * a, want) * wt).sum(-1)
+                    Rh = rotvec_matrix(axis * np.arctan2(num, den)[..., None])
+                    R = np.where(hinge[:, None, None], Rh, R)
+                Fv = orthonormalize(np.swapaxes(Mpar[:, sel], -1, -2) @ (R @ Mv))
+                Rloc = np.where(up[nodes][:, None, None], np.swapaxes(Fv, -1, -2), Fv)
+                Rloc = self._limit(Rloc, v)
+                Fv = np.where(up[nodes][:, None, None], np.swapaxes(Rloc, -1, -2), Rloc)
+                F[:, nodes] = Fv
+                Mc[:, sel] = Mpar[:, sel] @ Fv
+            M[:, lvl] = Mc
+            if k and up[lvl].any():  # an up node hangs below its own frame: p_u = p_c - M_u l_c
+                ups = lvl[up[lvl]]
+                p[:, ups] = p[:, m.parent[ups]] - matvec(M[:, ups], m.bone[ups])
+        out = F.copy()
+        out[:, up] = np.swapaxes(F[:, up], -1, -2)
+        return out
+
+    def fit_free(self, Rn: Array, wanted: Array) -> Array:
+        r""":meth:`fit` for unconstrained ball joints, all joints at once.
+
+        Each driven node's global orientation is turned by the rotation taking its current
+        offsets onto the wanted ones, :math:`M_u' = \mathrm{arc}(M_u l, w_u - w_{pivot}) M_u`
+        (Kabsch for several), and the local rotations follow as
+        :math:`F_u = M_{parent}'^{-1} M_u'`. Exact when the wanted positions keep the bone
+        lengths and every node places one bone (a FABRIK chain).
+        """
+        m = self.model
+        M, _ = self.forward(Rn)
+        d = m.var_nodes
+        cur = matvec(M[:, d][:, :, None], m.fit_local[d])
+        want = wanted[:, m.fit_nodes[d]] - wanted[:, m.pivot[d]][:, :, None]
+        M = M.copy()
+        M[:, d] = best_rotation(cur, want, m.fit_weight[d]) @ M[:, d]
+        frames = np.concatenate([self.base[:, None], M], 1)[:, m.parent[d] + 1]
+        F = orthonormalize(np.swapaxes(frames, -1, -2) @ M[:, d])
+        out = Rn.copy()
+        out[:, d] = np.where(m.up[d][:, None, None], np.swapaxes(F, -1, -2), F)
+        return out
+
+    def _axes(self) -> Array:
+        """Hinge axis (in the parent frame) of every variable, (V, 3) (zeros for balls)."""
+        m = self.model
+        axes = np.zeros((len(m.var_nodes), 3))
+        first = np.searchsorted(m.col_var, np.arange(len(m.var_nodes)))
+        axes[m.hinge] = m.col_axis[first[m.hinge]]
+        return axes
+
+    def _limit(self, R: Array, v: NDArray[np.int_]) -> Array:
+        """Local rotations ``R`` (B, n, 3, 3) of variables ``v`` projected into their limits."""
+        lo, hi = self.hinge_limits[v, 0], self.hinge_limits[v, 1]
+        if np.isfinite(lo).any() or np.isfinite(hi).any():
+            axes = self._axes()[v]
+            theta = twist_angle(R, axes)
+            fix = np.clip(theta, lo, hi) - theta
+            R = rotvec_matrix(axes * fix[..., None]) @ R
+        cap = self.ball_limit[v]
+        if np.isfinite(cap).any():
+            r = rotvec_of(R)
+            ang = norm(r)
+            scale = np.minimum(1.0, cap / np.maximum(ang, TINY))
+            R = np.where((scale < 1.0)[..., None, None], rotvec_matrix(r * scale[..., None]), R)
+        return R

@@ -1,0 +1,145 @@
+r"""Unchecked small linear algebra for the solvers' inner loops.
+
+Everything here works on rotation *matrices* batched over leading dimensions and never
+validates its input: the public solvers check their arguments once, then iterate with these.
+Degenerate input (zero vectors) gives the identity rather than NaN, because a zero-length bone
+or a target exactly on a joint must not poison a solve.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+Array = NDArray[np.float64]
+
+# Below this length a direction is treated as undefined (zero bone, target on the pivot).
+TINY = 1e-12
+
+
+def cross(a: Array, b: Array) -> Array:
+    """``a x b`` over the last axis; faster than ``np.cross`` for small arrays."""
+    ax, ay, az = a[..., 0], a[..., 1], a[..., 2]
+    bx, by, bz = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx], axis=-1)
+
+
+def dot(a: Array, b: Array) -> Array:
+    """Dot product over the last axis."""
+    return np.einsum("...i,...i->...", a, b)
+
+
+def norm(a: Array) -> Array:
+    """Euclidean length over the last axis."""
+    return np.sqrt(dot(a, a))
+
+
+def matvec(M: Array, v: Array) -> Array:
+    """``M v`` for stacks of 3x3 matrices and 3-vectors."""
+    return (M @ v[..., None])[..., 0]
+
+
+def rotvec_matrix(r: Array) -> Array:
+    r"""Rodrigues: :math:`R = I + \frac{\sin\theta}{\theta}[r]_\times +
+    \frac{1-\cos\theta}{\theta^2}[r]_\times^2` for rotation vectors ``r`` (..., 3), exact at 0."""
+    theta2 = dot(r, r)
+    theta = np.sqrt(theta2)
+    small = theta < 1e-8
+    safe = np.where(small, 1.0, theta)
+    # Series for tiny angles keeps the identity exact and avoids 0/0.
+    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
+    x, y, z = r[..., 0], r[..., 1], r[..., 2]
+    xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
+    return np.stack(
+        [
+            np.stack([1 - b * (yy + zz), b * xy - a * z, b * xz + a * y], -1),
+            np.stack([b * xy + a * z, 1 - b * (xx + zz), b * yz - a * x], -1),
+            np.stack([b * xz - a * y, b * yz + a * x, 1 - b * (xx + yy)], -1),
+        ],
+        axis=-2,
+    )
+
+
+def arc_matrix(u: Array, v: Array) -> Array:
+    r"""Shortest-arc rotation matrices turning direction ``u`` onto ``v`` (any lengths).
+
+    Axis :math:`u\times v`, angle :math:`\mathrm{atan2}(\lVert u\times v\rVert, u\cdot v)`.
+    The identity where either vector is (nearly) zero; a half turn about an axis perpendicular
+    to ``u`` where they are opposite.
+    """
+    c = cross(u, v)
+    s = norm(c)
+    d = dot(u, v)
+    angle = np.arctan2(s, d)
+    axis = c / np.where(s > TINY, s, 1.0)[..., None]
+    nu = norm(u)
+    opposite = (s <= TINY * np.maximum(nu * norm(v), TINY)) & (d < 0)
+    if np.any(opposite):
+        # Any perpendicular axis: cross with the coordinate axis along u's smallest component.
+        e = np.eye(3)[np.argmin(np.abs(u), axis=-1)]
+        perp = cross(u, e)
+        perp = perp / np.maximum(norm(perp), TINY)[..., None]
+        axis = np.where(opposite[..., None], perp, axis)
+        angle = np.where(opposite, np.pi, angle)
+    degenerate = (nu < TINY) | (norm(v) < TINY)
+    angle = np.where(degenerate, 0.0, angle)
+    return rotvec_matrix(axis * angle[..., None])
+
+
+def best_rotation(u: Array, v: Array, w: Array | None = None) -> Array:
+    r"""The rotation ``R`` minimising :math:`\sum_i w_i\lVert R u_i - v_i\rVert^2` (Kabsch).
+
+    Parameters
+    ----------
+    u, v : ndarray, shape (..., k, 3)
+        Vectors from the pivot to the current and to the wanted points.
+    w : ndarray, shape (..., k), optional
+        Weights.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        For one pair (``k = 1``) this is the shortest arc :func:`arc_matrix`.
+    """
+    if u.shape[-2] == 1:
+        return arc_matrix(u[..., 0, :], v[..., 0, :])
+    wu = u if w is None else u * w[..., None]
+    H = np.swapaxes(wu, -1, -2) @ v  # sum_i u_i v_i^T
+    U, _, Vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
+    d = np.where(d == 0, 1.0, d)
+    D = np.ones(H.shape[:-1])
+    D[..., -1] = d
+    return np.swapaxes(Vt, -1, -2) @ (D[..., None] * np.swapaxes(U, -1, -2))
+
+
+def twist_angle(R: Array, axis: Array) -> Array:
+    r"""Angle of rotation matrices ``R`` about unit ``axis``:
+    :math:`\mathrm{atan2}(a\cdot s,\ \mathrm{tr}R - 1)` with
+    :math:`s = (R_{21}-R_{12}, R_{02}-R_{20}, R_{10}-R_{01})`, which for a turn by θ about
+    ``axis`` is :math:`(2\sin\theta, 2\cos\theta)`: exact on all of :math:`(-\pi, \pi]`
+    (a hinge's rotations are such turns)."""
+    s = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
+                  R[..., 1, 0] - R[..., 0, 1]], -1)
+    return np.arctan2(dot(s, axis), R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2] - 1.0)
+
+
+def rotvec_of(R: Array) -> Array:
+    r"""Rotation vectors of rotation matrices, :math:`\theta\,\hat s` with
+    :math:`s = (R_{21}-R_{12}, R_{02}-R_{20}, R_{10}-R_{01}) = 2\sin\theta\,\hat a`.
+
+    Accurate away from half turns (the direction of a near half turn is ill-conditioned here;
+    the solvers only use it for errors and limits, where that is harmless)."""
+    s = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
+                  R[..., 1, 0] - R[..., 0, 1]], -1)
+    n = norm(s)
+    angle = np.arctan2(0.5 * n, 0.5 * (R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2] - 1.0))
+    return s * (angle / np.where(n > TINY, n, 1.0))[..., None]
+
+
+def orthonormalize(R: Array) -> Array:
+    r"""One Newton-Schulz step towards the nearest rotation, :math:`R \leftarrow \frac32 R -
+    \frac12 R R^T R`. Products like :math:`M^T R M` otherwise let rounding errors grow from
+    iteration to iteration; one step squares a small deviation from orthonormality."""
+    return 1.5 * R - 0.5 * (R @ np.swapaxes(R, -1, -2) @ R)

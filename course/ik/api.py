@@ -1,0 +1,314 @@
+"""``solve``: one entry point for every IK method, on any skeleton, rooted at any joint."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from . import ccd, fabrik, jacobian
+from ._chains import ChainModel, Problem, build_model
+from .result import History, IKResult, Target
+from .two_link import two_link
+
+Array = NDArray[np.float64]
+
+METHODS = ("two_link", "ccd", "fabrik", "jacobian_transpose", "pseudo_inverse", "dls")
+# Iteration budgets: Jacobian transpose converges linearly and slowly near the target.
+DEFAULT_MAX_ITER = {"two_link": 1, "ccd": 200, "fabrik": 200, "jacobian_transpose": 2000,
+                    "pseudo_inverse": 100, "dls": 100}
+
+
+def solve(
+    skeleton: Any,
+    local_rotations: ArrayLike,
+    root_position: ArrayLike,
+    targets: Mapping[str | int, Any],
+    method: str = "dls",
+    root: str | int | None = None,
+    tol: float = 1e-4,
+    max_iter: int | None = None,
+    weights: Mapping[str | int, float] | None = None,
+    limits: Mapping[str | int, Any] | None = None,
+    record: bool = False,
+    **options: Any,
+) -> IKResult:
+    r"""Move a skeleton's joints so that the end effectors reach their targets.
+
+    Only the local rotations on the paths from the fixed joint ``root`` to the effectors
+    change; every other joint keeps its local rotation (and so moves rigidly with its parent).
+    With ``root`` other than joint 0 the skeleton is re-rooted there (the lecture's root at
+    the foot, :math:`Q_p = Q_c R_c^{-1},\ p_p = p_c - Q_p l_c`): that joint keeps its position
+    and, if any path leaves it upwards, its global orientation; the rest of the body, joint 0
+    included, moves around it. If all effectors lie below ``root``, its parent frame is held
+    and ``R_root`` is a variable (as for an ordinary chain rooted at joint 0).
+
+    Parameters
+    ----------
+    skeleton : course.skeleton.Skeleton
+        Hinge joints solve for one angle about their axis, ball (and universal) joints for a
+        full rotation, fixed joints not at all.
+    local_rotations : array_like, shape ([B,] J, 4)
+        Starting pose (unit quaternions); a leading ``B`` solves ``B`` problems at once.
+    root_position : array_like, shape ([B,] 3)
+        Position of joint 0.
+    targets : mapping joint (name or index) -> target
+        A world position ``(3,)`` or ``(B, 3)``; a pair ``(position, quaternion)``; or a
+        :class:`Target`. Orientation targets need a Jacobian method.
+    method : {"two_link", "ccd", "fabrik", "jacobian_transpose", "pseudo_inverse", "dls"}
+    root : joint name or index, optional
+        The joint that stays fixed; default joint 0.
+    tol : float
+        Convergence: every effector within ``tol`` (orientations within ``tol`` radians).
+    max_iter : int, optional
+        Default per method (:data:`DEFAULT_MAX_ITER`).
+    weights : mapping joint -> float, optional
+        Jacobian methods: the regulariser :math:`W` (larger: the joint moves less).
+    limits : mapping joint -> (lo, hi) or float, optional
+        Hinge angle range in radians, or the largest rotation angle of a ball joint's local
+        rotation. Enforced by projection after each step (CCD, Jacobian) or joint placement
+        (FABRIK, two-link).
+    record : bool
+        Keep every iteration's pose in ``result.frames``.
+    **options
+        ``damping`` (DLS :math:`\lambda`, a length), ``rcond`` (pseudo-inverse cutoff),
+        ``max_step`` (largest joint step per Jacobian iteration, radians), ``tip_to_root`` and
+        ``max_angle`` (CCD), ``pole`` (a world point) and ``flip`` (two-link).
+
+    Returns
+    -------
+    IKResult
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: unknown method, joint or option; non-finite or badly shaped
+        input; a two-link solve whose path is not two bones.
+    """
+    from course import fk
+    from course.rotations import matrix_from_quat
+    from course.rotations._checks import as_array
+
+    if method not in METHODS:
+        raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
+    allowed = {"two_link": {"pole", "flip"}, "ccd": {"tip_to_root", "max_angle"},
+               "fabrik": set()}.get(method, {"damping", "rcond", "max_step"})
+    unknown = set(options) - allowed
+    if unknown:
+        raise ValueError(f"options: {sorted(unknown)} do not apply to method {method!r} "
+                         f"(it takes {sorted(allowed) or 'none'})")
+    if not (np.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol: expected a positive number, got {tol!r}")
+    J = skeleton.n_joints
+    local = as_array(local_rotations, "local_rotations", (4,))
+    if local.ndim not in (2, 3) or local.shape[-2] != J:
+        raise ValueError(f"local_rotations: expected shape ([B,] {J}, 4), got {local.shape}")
+    qn = np.linalg.norm(local, axis=-1, keepdims=True)
+    if np.any(qn < 1e-12):
+        raise ValueError("local_rotations: contains a zero quaternion, which is no rotation")
+    local = local / qn
+    root_pos = as_array(root_position, "root_position", (3,))
+    if root_pos.ndim > 2:
+        raise ValueError(f"root_position: expected shape ([B,] 3), got {root_pos.shape}")
+    k = 0 if root is None else skeleton.index(root)
+
+    if not isinstance(targets, Mapping) or not targets:
+        raise ValueError("targets: expected a non-empty mapping joint -> target")
+    pos_t, rot_t = {}, {}
+    for key, value in targets.items():
+        j = skeleton.index(key)
+        name = f"targets[{key!r}]"
+        position, orientation = _split_target(value)
+        if position is not None:
+            pos_t[j] = as_array(position, f"{name} position", (3,))
+        if orientation is not None:
+            rot_t[j] = as_array(orientation, f"{name} orientation", (4,))
+    if rot_t and method not in jacobian.METHODS:
+        raise ValueError(f"targets: orientation targets need a Jacobian method, not {method!r}")
+    if k in pos_t or k in rot_t:
+        raise ValueError(f"root: joint {skeleton.names[k]!r} is fixed, it cannot also be a target")
+
+    arrays = [local[..., 0, 0], root_pos[..., 0]] + [a[..., 0] for a in pos_t.values()]
+    arrays += [a[..., 0] for a in rot_t.values()]
+    shape = np.broadcast_shapes(*(np.shape(a) for a in arrays))
+    if len(shape) > 1:
+        raise ValueError(f"targets: leading shapes {shape} do not broadcast to one batch axis")
+    batched = len(shape) == 1
+    B = shape[0] if batched else 1
+
+    model = _model(skeleton, k, tuple(pos_t), tuple(rot_t))
+    local_b = np.broadcast_to(local, (B, J, 4)).copy()
+    root_b = np.broadcast_to(root_pos, (B, 3)).copy()
+    if k == 0:  # the world frame is held and joint 0 sits at the root position
+        base, p_k, Q_k = np.broadcast_to(np.eye(3), (B, 3, 3)), root_b, None
+    else:
+        positions, orientations = fk.forward_kinematics(skeleton.parents, skeleton.offsets,
+                                                        local_b, root_b)
+        p_k, Q_k = positions[:, k], orientations[:, k]
+        base = matrix_from_quat(orientations[:, skeleton.parents[k]] if model.anchor_parent
+                                else Q_k)
+    Rn = np.broadcast_to(np.eye(3), (B, model.n_nodes, 3, 3)).copy()
+    has = model.edge_joint >= 0
+    Rn[:, has] = matrix_from_quat(local_b[:, model.edge_joint[has]])
+    problem = Problem(
+        model=model, Rn=Rn, base=base, p0=p_k,
+        target_pos=np.stack([np.broadcast_to(pos_t[j], (B, 3)) for j in pos_t], 1)
+        if pos_t else np.zeros((B, 0, 3)),
+        target_rot=np.stack([matrix_from_quat(np.broadcast_to(rot_t[j], (B, 4))) for j in rot_t],
+                            1) if rot_t else np.zeros((B, 0, 3, 3)),
+        col_weight=_weights(skeleton, model, weights),
+        hinge_limits=np.full((len(model.var_nodes), 2), [-np.inf, np.inf]),
+        ball_limit=np.full(len(model.var_nodes), np.inf),
+    )
+    _set_limits(skeleton, problem, limits)
+    if not pos_t:
+        problem.target_pos = np.zeros((B, 0, 3))
+
+    max_iter = DEFAULT_MAX_ITER[method] if max_iter is None else int(max_iter)
+    if method == "two_link":
+        Rn_out, history, frames = _two_link(problem, tol, record, **options)
+    elif method == "ccd":
+        Rn_out, history, frames = ccd.solve_problem(problem, tol, max_iter, record=record,
+                                                    **options)
+    elif method == "fabrik":
+        Rn_out, history, frames = fabrik.solve_problem(problem, tol, max_iter, record=record)
+    else:
+        Rn_out, history, frames = jacobian.solve_problem(problem, method, tol, max_iter,
+                                                         record=record, **options)
+
+    pose = _pose(skeleton, model, local_b, root_b, Q_k, p_k, Rn_out)
+    reason = history.reasons(problem.unreachable() if len(model.effectors) else np.zeros(B, bool))
+    recorded = None
+    if record:
+        T = len(frames)
+        stacked = _pose(skeleton, model, np.tile(local_b, (T, 1, 1)), np.tile(root_b, (T, 1)),
+                        None if Q_k is None else np.tile(Q_k, (T, 1)), np.tile(p_k, (T, 1)),
+                        np.concatenate(frames, 0))
+        recorded = [
+            {"positions": _unbatch(stacked[2][t * B:(t + 1) * B], batched),
+             "local_rotations": _unbatch(stacked[0][t * B:(t + 1) * B], batched)}
+            for t in range(T)
+        ]
+    residuals = np.stack(history.residuals)
+    return IKResult(
+        local_rotations=_unbatch(pose[0], batched),
+        root_position=_unbatch(pose[1], batched),
+        positions=_unbatch(pose[2], batched),
+        converged=_unbatch(history.error < tol, batched),
+        iterations=_unbatch(history.iterations, batched),
+        residuals=residuals if batched else residuals[:, 0],
+        reason=_unbatch(reason, batched),
+        method=method,
+        frames=recorded,
+    )
+
+
+def _unbatch(a: Any, batched: bool) -> Any:
+    if batched:
+        return a
+    a = a[0]
+    return a.item() if isinstance(a, np.generic) else a
+
+
+def _split_target(value: Any) -> tuple[Any, Any]:
+    """``(position, orientation)`` of a target given as Target, pair or position."""
+    if isinstance(value, Target):
+        return value.position, value.orientation
+    if isinstance(value, tuple) and len(value) == 2 and np.shape(value[1])[-1:] == (4,):
+        return value
+    return value, None
+
+
+@lru_cache(maxsize=128)
+def _cached_model(parents: tuple, offsets: bytes, kinds: tuple, root: int, eff: tuple,
+                  reff: tuple) -> ChainModel:
+    off = np.frombuffer(offsets).reshape(-1, 3)
+    return build_model(np.array(parents), off, list(kinds), root, list(eff), list(reff))
+
+
+def _model(skeleton: Any, root: int, eff: tuple, reff: tuple) -> ChainModel:
+    """The (cached) model: a slider calls ``solve`` with the same skeleton over and over."""
+    kinds = []
+    for t in skeleton.joint_types:
+        axis = getattr(t, "axis", None)
+        kinds.append(tuple(axis) if axis is not None else (False if t.dof == 0 else None))
+    return _cached_model(tuple(int(p) for p in skeleton.parents),
+                         np.ascontiguousarray(skeleton.offsets, float).tobytes(), tuple(kinds),
+                         root, eff, reff)
+
+
+def _weights(skeleton: Any, model: ChainModel, weights: Mapping | None) -> Array:
+    w = np.ones(model.n_cols)
+    for key, value in (weights or {}).items():
+        j = skeleton.index(key)
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"weights[{key!r}]: expected a positive number, got {value!r}")
+        w[model.edge_joint[model.var_nodes[model.col_var]] == j] = value
+    return w
+
+
+def _set_limits(skeleton: Any, problem: Problem, limits: Mapping | None) -> None:
+    m = problem.model
+    var_joint = m.edge_joint[m.var_nodes]
+    for key, value in (limits or {}).items():
+        j = skeleton.index(key)
+        hinge = getattr(skeleton.joint_types[j], "axis", None) is not None
+        v = np.flatnonzero(var_joint == j)
+        if hinge:
+            lo, hi = (float(x) for x in np.broadcast_to(np.asarray(value, float), (2,)))
+            if not lo <= hi:
+                raise ValueError(f"limits[{key!r}]: a hinge range needs lo <= hi, got {value!r}")
+            problem.hinge_limits[v] = (lo, hi)
+        else:
+            if np.ndim(value) != 0 or not value >= 0:
+                raise ValueError(f"limits[{key!r}]: a ball joint takes one largest angle "
+                                 f"(radians, >= 0), got {value!r}")
+            problem.ball_limit[v] = float(value)
+    problem.Rn = problem.project(problem.Rn)
+
+
+def _pose(skeleton: Any, model: ChainModel, local: Array, root_pos: Array, Qk: Array | None,
+          pk: Array, Rn: Array) -> tuple[Array, Array, Array]:
+    """Local rotations, root position and global positions of solved edge rotations."""
+    from course import fk
+    from course.rotations import quat_from_matrix
+
+    local = local.copy()
+    joints = model.edge_joint[model.var_nodes]
+    q = quat_from_matrix(Rn[:, model.var_nodes])
+    # Keep the sign of the starting quaternion, so an animated solve has no sign flips.
+    flip = np.einsum("bji,bji->bj", q, local[:, joints]) < 0
+    local[:, joints] = np.where(flip[..., None], -q, q)
+    if model.anchor_parent:
+        if model.n_nodes == len(local[0]) and model.joints[0] == 0:
+            # The paths cover the skeleton (a chain): the model's own FK has every position.
+            _, p = model.forward(Rn, np.broadcast_to(np.eye(3), Rn.shape[:1] + (3, 3)), root_pos)
+            positions = np.empty_like(p)
+            positions[:, model.joints] = p
+        else:
+            positions, _ = fk.forward_kinematics(skeleton.parents, skeleton.offsets, local,
+                                                 root_pos)
+        return local, root_pos, positions
+    k = int(model.joints[0])
+    positions, orientations = fk.forward_kinematics(
+        skeleton.parents, skeleton.offsets, local, pk, root=k, root_orientation=Qk)
+    local[:, 0] = orientations[:, 0]
+    return local, positions[:, 0].copy(), positions
+
+
+def _two_link(problem: Problem, tol: float, record: bool, pole: ArrayLike | None = None,
+              flip: bool = False) -> tuple[Array, History, list[Array]]:
+    m = problem.model
+    if m.n_nodes != 3 or len(m.effectors) != 1 or m.effectors[0] != 2:
+        raise ValueError(
+            "method: 'two_link' needs the path from root to the one effector to be two bones "
+            f"(three joints), got {m.n_nodes} joints; choose root accordingly")
+    _, p = problem.forward(problem.Rn)
+    history = History(problem.error(*problem.forward(problem.Rn))[1], tol, 1)
+    b, c, _ = two_link(p[:, 0], p[:, 1], p[:, 2], problem.target_pos[:, 0], pole, flip)
+    Rn = problem.fit(problem.Rn, np.stack([p[:, 0], b, c], 1))
+    history.update(problem.error(*problem.forward(Rn))[1])
+    return Rn, history, [problem.Rn, Rn] if record else []

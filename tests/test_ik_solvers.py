@@ -1,0 +1,284 @@
+"""``course.ik.solve`` on chains and on the CMU skeleton, every method. Answers are checked by
+forward-kinematics residual and constraints (bone lengths, fixed root, limits), never by
+joint angles."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from course.ik import METHODS, Target, solve
+from course.rotations import matrix_from_quat, quat_from_axis_angle, quat_from_rotvec
+from course.skeleton import chain
+
+AXES = np.array([[0, 1, 0], [0, 0, 1]] * 3 + [[0, 1, 0]], float)
+HINGE = chain([1.0] * 7, axes=AXES)
+BALL = chain([1.0] * 7)
+IDENT = np.tile([1.0, 0, 0, 0], (8, 1))
+
+
+def _reachable_targets(n: int, seed: int) -> np.ndarray:
+    """End positions of random hinge poses: reachable by both chains."""
+    rng = np.random.default_rng(seed)
+    q = np.tile(IDENT, (n, 1, 1))
+    q[:, :7] = quat_from_axis_angle(AXES, rng.uniform(-1.5, 1.5, (n, 7)))
+    return HINGE.forward_kinematics(q)[0][:, -1]
+
+
+def _check_pose(sk, result):
+    """Bones kept (FK of the returned pose gives the returned positions) and root fixed."""
+    pos, _ = sk.forward_kinematics(result.local_rotations, result.root_position)
+    np.testing.assert_allclose(pos, result.positions, atol=1e-9)
+    np.testing.assert_allclose(result.root_position, np.zeros(3), atol=1e-12)
+    bones = np.linalg.norm(np.diff(result.positions, axis=-2), axis=-1)
+    np.testing.assert_allclose(bones, 1.0, atol=1e-9)
+    assert np.all(np.isfinite(result.local_rotations))
+
+
+# Share of seeded reachable targets each method reaches to 1e-4 from the zero pose (hinge chain
+# unless noted). CCD and the transpose method crawl on some targets; FABRIK runs on ball joints.
+SUCCESS = {"dls": 1.0, "pseudo_inverse": 0.95, "jacobian_transpose": 0.8, "ccd": 0.9,
+           "fabrik": 1.0}
+
+
+@pytest.mark.parametrize("method", list(SUCCESS))
+def test_methods_reach_seeded_targets(method):
+    sk = BALL if method == "fabrik" else HINGE
+    targets = _reachable_targets(12, seed=10)
+    hits = 0
+    for t in targets:
+        r = solve(sk, IDENT, np.zeros(3), {"end_effector": t}, method=method)
+        _check_pose(sk, r)
+        err = np.linalg.norm(r.positions[-1] - t)
+        np.testing.assert_allclose(err, r.residuals[-1], atol=1e-9)  # honest residual
+        assert r.converged == (err < 1e-4)
+        assert r.converged or r.reason in ("max_iterations", "stalled")
+        hits += r.converged
+    assert hits >= SUCCESS[method] * len(targets)
+
+
+def test_hinge_joints_stay_hinges():
+    t = _reachable_targets(1, seed=11)[0]
+    for method in ("dls", "ccd", "pseudo_inverse"):
+        r = solve(HINGE, IDENT, np.zeros(3), {"end_effector": t}, method=method)
+        R = matrix_from_quat(r.local_rotations[:7])
+        np.testing.assert_allclose(np.einsum("jab,jb->ja", R, AXES), AXES, atol=1e-9)
+
+
+def test_batched_dls_and_fabrik_match_single():
+    targets = _reachable_targets(16, seed=12)
+    for method, sk in (("dls", HINGE), ("fabrik", BALL)):
+        rb = solve(sk, IDENT, np.zeros(3), {"end_effector": targets}, method=method)
+        assert rb.positions.shape == (16, 8, 3) and rb.converged.shape == (16,)
+        assert rb.converged.all()
+        np.testing.assert_allclose(rb.positions[:, -1], targets, atol=1e-4)
+        one = solve(sk, IDENT, np.zeros(3), {"end_effector": targets[3]}, method=method)
+        np.testing.assert_allclose(one.positions, rb.positions[3], atol=1e-9)
+
+
+@pytest.mark.parametrize("method", ["dls", "pseudo_inverse", "ccd", "fabrik", "jacobian_transpose"])
+def test_unreachable_reports_stretched_pose(method):
+    t = np.array([3.0, 9.0, 2.0])
+    r = solve(BALL, IDENT, np.zeros(3), {"end_effector": t}, method=method, tol=1e-4)
+    assert not r.converged and r.reason == "unreachable"
+    _check_pose(BALL, r)
+    # Best pose: stretched straight at the target. FABRIK answers in one pass; the iterative
+    # methods approach it, but near the straight pose the error is flat (it grows with the
+    # square of the bend), so they stop with the error ~1e-3 off and the joints visibly bent.
+    u = t / np.linalg.norm(t)
+    if method == "fabrik":
+        np.testing.assert_allclose(r.positions, np.arange(8)[:, None] * u, atol=1e-9)
+    np.testing.assert_allclose(r.error, np.linalg.norm(t) - 7.0, atol=1e-9 if method == "fabrik"
+                               else 5e-3)
+    # A hinge chain whose base turns about y cannot point its first bone at t; it still
+    # reports unreachable, with a pose no worse than where it started.
+    h = solve(HINGE, IDENT, np.zeros(3), {"end_effector": t}, method=method if method not in
+              ("fabrik", "ccd") else "dls")
+    assert h.reason == "unreachable" and h.error < h.residuals[0]
+    assert np.all(np.diff(h.residuals) <= 1e-12) or method in ("fabrik", "ccd")
+
+
+def test_limits_respected():
+    t = _reachable_targets(6, seed=13)
+    lim = {f"joint{i}": (-0.4, 0.4) for i in range(7)}
+    for method in ("dls", "ccd", "fabrik", "jacobian_transpose", "pseudo_inverse"):
+        for target in t:
+            r = solve(HINGE, IDENT, np.zeros(3), {"end_effector": target}, method=method,
+                      limits=lim, max_iter=60)
+            angles = 2 * np.arctan2(np.einsum("ji,ji->j", r.local_rotations[:7, 1:], AXES),
+                                    r.local_rotations[:7, 0])
+            angles = (angles + np.pi) % (2 * np.pi) - np.pi
+            assert np.all(np.abs(angles) <= 0.4 + 1e-9), method
+    cap = 0.3
+    r = solve(BALL, IDENT, np.zeros(3), {"end_effector": [2.0, 5.0, 1.0]}, method="dls",
+              limits={f"joint{i}": cap for i in range(7)})
+    half = np.linalg.norm(r.local_rotations[:7, 1:], axis=1)
+    assert np.all(2 * np.arcsin(np.minimum(half, 1)) <= cap + 1e-9)
+
+
+def test_weights_make_a_joint_move_less():
+    t = _reachable_targets(1, seed=14)[0]
+    free = solve(BALL, IDENT, np.zeros(3), {"end_effector": t}, method="dls")
+    held = solve(BALL, IDENT, np.zeros(3), {"end_effector": t}, method="dls",
+                 weights={"joint0": 20.0})
+    assert held.converged
+    assert 1 - abs(held.local_rotations[0, 0]) < 0.2 * (1 - abs(free.local_rotations[0, 0]))
+
+
+def test_two_link_solve_and_pole():
+    sk = chain([2.0, 1.5])
+    t = np.array([1.0, 2.0, 0.5])
+    for pole, flip in (([0, 0, 5.0], False), ([0, 0, 5.0], True), (None, False)):
+        r = solve(sk, np.tile(IDENT[0], (3, 1)), np.zeros(3), {"end_effector": t},
+                  method="two_link", pole=pole, flip=flip)
+        assert r.converged and r.iterations == 1
+        np.testing.assert_allclose(r.positions[-1], t, atol=1e-12)
+        np.testing.assert_allclose(np.linalg.norm(np.diff(r.positions, axis=0), axis=1),
+                                   [2.0, 1.5], atol=1e-12)
+        if pole is not None:
+            side = np.dot(r.positions[1], [0, 0, 1.0])
+            assert (side < 0) if flip else (side > 0)
+    far = solve(sk, np.tile(IDENT[0], (3, 1)), np.zeros(3), {"end_effector": 10 * t},
+                method="two_link")
+    assert far.reason == "unreachable"
+    np.testing.assert_allclose(far.positions[-1], 3.5 * t / np.linalg.norm(t), atol=1e-12)
+    with pytest.raises(ValueError, match="two bones"):
+        solve(BALL, IDENT, np.zeros(3), {"end_effector": t}, method="two_link")
+
+
+def test_record_frames_replay():
+    t = _reachable_targets(1, seed=15)[0]
+    for method in ("ccd", "fabrik", "dls"):
+        r = solve(BALL, IDENT, np.zeros(3), {"end_effector": t}, method=method, record=True)
+        assert len(r.frames) == r.iterations + 1
+        np.testing.assert_allclose(r.frames[-1]["positions"], r.positions, atol=1e-12)
+        errs = [np.linalg.norm(f["positions"][-1] - t) for f in r.frames]
+        np.testing.assert_allclose(errs, r.residuals, atol=1e-9)
+
+
+def test_degenerate_input_no_nan():
+    zero_bone = chain(np.array([[1.0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 0, 0]]))
+    ident = np.tile(IDENT[0], (5, 1))
+    for method in METHODS[1:]:
+        for t in ([0.0, 0, 0], [1.5, 0, 0], [-2.0, 0, 0], [5.0, 0, 0], [1.0, 1.0, 0]):
+            r = solve(zero_bone, ident, np.zeros(3), {"end_effector": t}, method=method,
+                      max_iter=30)
+            assert np.all(np.isfinite(r.positions)) and np.all(np.isfinite(r.residuals))
+            bones = np.linalg.norm(np.diff(r.positions, axis=0), axis=1)
+            np.testing.assert_allclose(bones, [1, 0, 1, 1], atol=1e-9)
+            assert r.converged or r.reason
+
+
+def test_bad_input_names_the_argument():
+    t = np.array([1.0, 2.0, 0.0])
+    cases = [
+        (dict(targets={"end_effector": [np.nan, 0, 0]}), "targets"),
+        (dict(local_rotations=np.full((8, 4), np.inf)), "local_rotations"),
+        (dict(root_position=[0, np.nan, 0]), "root_position"),
+        (dict(method="newton"), "method"),
+        (dict(targets={"nope": t}), "nope"),
+        (dict(targets={"end_effector": (t, [1, 0, 0, 0])}, method="fabrik"), "targets"),
+        (dict(weights={"joint1": -1.0}), "weights"),
+        (dict(damping=0.1, method="ccd"), "options"),
+    ]
+    for kwargs, word in cases:
+        args = dict(skeleton=BALL, local_rotations=IDENT, root_position=np.zeros(3),
+                    targets={"end_effector": t}) | kwargs
+        with pytest.raises(ValueError, match=word):
+            solve(**args)
+
+
+def test_orientation_target_with_dls():
+    rng = np.random.default_rng(16)
+    q = np.tile(IDENT, (1, 1))
+    q[:7] = quat_from_rotvec(rng.normal(scale=0.4, size=(7, 3)))
+    pos, ori = BALL.forward_kinematics(q)
+    r = solve(BALL, IDENT, np.zeros(3), {"joint6": Target(pos[6], ori[6])}, method="dls")
+    assert r.converged
+    _, got = BALL.forward_kinematics(r.local_rotations)
+    np.testing.assert_allclose(r.positions[6], pos[6], atol=1e-4)
+    assert abs(abs(np.dot(got[6], ori[6])) - 1) < 1e-7
+
+
+# --------------------------------------------------------------------------- CMU skeleton
+@pytest.fixture(scope="module")
+def walk(shared_bvh_dir):
+    from course.bvh import load_bvh
+
+    return load_bvh(shared_bvh_dir / "cmu_12_01_walk.bvh")
+
+
+def _moved(before, after):
+    return np.linalg.norm(after - before, axis=-1) > 1e-9
+
+
+@pytest.mark.parametrize("method", ["dls", "fabrik", "ccd", "pseudo_inverse"])
+def test_both_hands_from_hips(walk, method):
+    sk = walk.skeleton
+    local, root = walk.local_rotations[60], walk.root_positions[60]
+    pos0, _ = sk.forward_kinematics(local, root)
+    lh, rh = sk.index("LeftHand"), sk.index("RightHand")
+    targets = {"LeftHand": pos0[lh] + [3.0, 4.0, 2.0], "RightHand": pos0[rh] + [-2.0, 5.0, 3.0]}
+    r = solve(sk, local, root, targets, method=method, tol=1e-3)
+    assert r.converged, (r.reason, r.error)
+    pos, _ = sk.forward_kinematics(r.local_rotations, r.root_position)
+    np.testing.assert_allclose(pos, r.positions, atol=1e-9)
+    np.testing.assert_allclose(r.root_position, root)
+    np.testing.assert_allclose(np.linalg.norm(pos - pos[sk.parents], axis=1)[1:],
+                               np.linalg.norm(sk.offsets, axis=1)[1:], atol=1e-9)
+    # Rooted at the hips, the hips turn (R_0 is solved, the legs swing rigidly with them);
+    # rooted at the lower back, the hips' frame is held and the legs stay put.
+    back = solve(sk, local, root, targets, method=method, tol=1e-3, root="LowerBack")
+    assert back.converged
+    for name in ("LeftToeBase", "RightFoot", "Hips"):
+        j = sk.index(name)
+        np.testing.assert_allclose(back.positions[j], pos0[j], atol=1e-9)
+        np.testing.assert_allclose(back.local_rotations[j], local[j], atol=1e-12)
+    np.testing.assert_allclose(back.positions[sk.index("LowerBack")],
+                               pos0[sk.index("LowerBack")], atol=1e-9)
+    off_path = [j for j in range(sk.n_joints) if j not in set(sk.path(0, lh) + sk.path(0, rh))]
+    np.testing.assert_allclose(r.local_rotations[off_path], local[off_path], atol=1e-12)
+
+
+@pytest.mark.parametrize("root_name", ["Hips", "LeftFoot", "RightArm"])
+def test_same_reach_rooted_elsewhere(walk, root_name):
+    sk = walk.skeleton
+    local, root = walk.local_rotations[200], walk.root_positions[200]
+    pos0, ori0 = sk.forward_kinematics(local, root)
+    k = sk.index(root_name)
+    t = pos0[sk.index("RightHand")] + [2.0, 3.0, -2.0]
+    r = solve(sk, local, root, {"RightHand": t}, method="dls", root=root_name)
+    assert r.converged
+    pos, ori = sk.forward_kinematics(r.local_rotations, r.root_position)
+    np.testing.assert_allclose(pos, r.positions, atol=1e-9)
+    np.testing.assert_allclose(pos[sk.index("RightHand")], t, atol=1e-4)
+    np.testing.assert_allclose(pos[k], pos0[k], atol=1e-9)  # the fixed joint stays
+    moved = _moved(pos0, pos)
+    left_foot = sk.index("LeftFoot")
+    if root_name == "LeftFoot":  # planted: orientation kept, the body moves over it
+        assert abs(abs(np.dot(ori[k], ori0[k])) - 1) < 1e-12
+        assert moved[0] and moved[sk.index("Head")]
+    elif root_name == "RightArm":  # only the arm below the shoulder moves
+        assert not moved[0] and not moved[left_foot] and not moved[sk.index("Head")]
+        assert not moved[sk.index("RightShoulder")]
+    else:  # the hips stay and turn; the legs keep their local rotations
+        assert not moved[0]
+        legs = sk.path(0, sk.index("LeftToeBase"))[1:]
+        np.testing.assert_allclose(r.local_rotations[legs], local[legs], atol=1e-12)
+
+
+def test_rerooted_multi_effector_hand_and_foot(walk):
+    sk = walk.skeleton
+    local, root = walk.local_rotations[300], walk.root_positions[300]
+    pos0, _ = sk.forward_kinematics(local, root)
+    targets = {"LeftHand": pos0[sk.index("LeftHand")] + [0.0, 6.0, 3.0],
+               "RightFoot": pos0[sk.index("RightFoot")] + [0.0, 4.0, 4.0]}
+    for method in ("dls", "fabrik"):
+        r = solve(sk, local, root, targets, method=method, root="LeftToeBase", tol=1e-3)
+        assert r.converged, method
+        pos, _ = sk.forward_kinematics(r.local_rotations, r.root_position)
+        np.testing.assert_allclose(pos, r.positions, atol=1e-9)
+        np.testing.assert_allclose(pos[sk.index("LeftToeBase")], pos0[sk.index("LeftToeBase")],
+                                   atol=1e-9)
+        for name, t in targets.items():
+            assert np.linalg.norm(pos[sk.index(name)] - t) < 1e-3
