@@ -14,7 +14,7 @@ lab: setup
 	$(VENV)/bin/jupyter lab notebooks/
 
 test: setup
-	$(TEST_ENV) $(PY) -m pytest --nbval-lax tests notebooks assignments
+	$(TEST_ENV) $(PY) -m pytest --nbval-lax --nbval-current-env --ignore=tests/e2e tests notebooks assignments
 
 lint: setup
 	$(VENV)/bin/ruff check .

@@ -5,10 +5,11 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
-from conftest import REPO
+REPO = Path(__file__).resolve().parents[1]
 
 NOTEBOOKS = sorted([*REPO.glob("notebooks/*.ipynb"), *REPO.glob("assignments/*.ipynb")])
 
@@ -42,3 +43,20 @@ def test_ruff_clean():
         pytest.skip("ruff is installed by `make test`")
     out = subprocess.run([str(ruff), "check", "--quiet", str(REPO)], capture_output=True, text=True)
     assert out.returncode == 0, out.stdout + out.stderr
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_checked_cells_have_recorded_output(path):
+    """A `# NBVAL_CHECK_OUTPUT` cell is only compared if its expected printout is recorded
+    (see tests/record_notebook_outputs.py and the root conftest.py)."""
+    cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    missing = [
+        i for i, c in enumerate(cells)
+        if c["cell_type"] == "code"
+        and "".join(c["source"]).lstrip().startswith("# NBVAL_CHECK_OUTPUT")
+        and "nbval_expected" not in c.get("metadata", {})
+    ]
+    assert not missing, (
+        f"{path.name}: checked cells {missing} have no recorded output; run "
+        f"`.venv/bin/python tests/record_notebook_outputs.py {path.relative_to(REPO)}`"
+    )
