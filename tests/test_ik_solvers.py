@@ -282,3 +282,42 @@ def test_rerooted_multi_effector_hand_and_foot(walk):
                                    atol=1e-9)
         for name, t in targets.items():
             assert np.linalg.norm(pos[sk.index(name)] - t) < 1e-3
+
+
+@pytest.mark.parametrize("method", ["dls", "pseudo_inverse", "jacobian_transpose", "fabrik"])
+def test_fast_serial_path_agrees_with_general_model(method, monkeypatch):
+    """The serial-chain fast path (floats for one problem, component arrays for a batch) and
+    the general model reach the same poses: same residuals, limits and bones."""
+    import course.ik.api as api
+
+    sk = BALL if method == "fabrik" else HINGE
+    targets = _reachable_targets(6, seed=16)
+    lim = None if method == "fabrik" else {f"joint{i}": (-1.2, 1.2) for i in range(7)}
+    runs = {}
+    for fast in (True, False):
+        monkeypatch.setattr(api, "_FAST_PATH", fast)
+        one = [solve(sk, IDENT, np.zeros(3), {"end_effector": t}, method=method, limits=lim,
+                     max_iter=60) for t in targets]
+        batch = solve(sk, IDENT, np.zeros(3), {"end_effector": targets}, method=method,
+                      limits=lim, max_iter=60)
+        runs[fast] = one, batch
+    (one_f, batch_f), (one_g, _) = runs[True], runs[False]
+    for i, (f, g) in enumerate(zip(one_f, one_g, strict=True)):
+        _check_pose(sk, f)
+        assert f.iterations == g.iterations and f.reason == g.reason
+        np.testing.assert_allclose(f.residuals, g.residuals, atol=1e-8)
+        np.testing.assert_allclose(f.positions, g.positions, atol=1e-7)
+        np.testing.assert_allclose(batch_f.positions[i], f.positions, atol=1e-9)
+
+
+@pytest.mark.parametrize("method", ["pseudo_inverse", "dls"])
+@pytest.mark.parametrize("fast", [True, False])
+def test_singular_pose_reported(method, fast, monkeypatch):
+    """A straight chain and a reachable target along it: every Jacobian column is
+    perpendicular to the chain, so no step shortens it; the solve says "singular"."""
+    import course.ik.api as api
+
+    monkeypatch.setattr(api, "_FAST_PATH", fast)
+    r = solve(BALL, IDENT, np.zeros(3), {"end_effector": [5.0, 0, 0]}, method=method)
+    assert not r.converged and r.reason == "singular"
+    np.testing.assert_allclose(r.error, 2.0, atol=1e-9)

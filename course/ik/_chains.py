@@ -354,6 +354,15 @@ def build_model(
     )
 
 
+def unreachable_targets(model: ChainModel, target_pos: Array, p0: Array) -> NDArray[np.bool_]:
+    """(B,) some position target (B, E, 3) lies outside the shell its effector can reach from
+    the fixed joint at ``p0`` (B, 3)."""
+    far, near = model.reach_far, model.reach_near
+    d = norm(target_pos - p0[:, None])
+    slack = 1e-9 * max(float(far.max()), 1.0)
+    return ((d > far + slack) | (d < near - slack)).any(axis=1)
+
+
 @dataclass
 class Problem:
     """One model with a batch of ``B`` starting poses and targets, ready to iterate.
@@ -411,10 +420,7 @@ class Problem:
 
     def unreachable(self) -> NDArray[np.bool_]:
         """(B,) some position target lies outside the shell its effector can reach."""
-        far, near = self.reach()
-        d = norm(self.target_pos - self.p0[:, None])
-        slack = 1e-9 * max(float(far.max()), 1.0)
-        return ((d > far + slack) | (d < near - slack)).any(axis=1)
+        return unreachable_targets(self.model, self.target_pos, self.p0)
 
     def project(self, Rn: Array) -> Array:
         """Edge rotations with every variable projected into its limits."""

@@ -10,11 +10,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import ccd, fabrik, jacobian
-from ._chains import ChainModel, Problem, build_model
+from ._chains import ChainModel, Problem, build_model, unreachable_targets
+from ._serial import ARRAYS, FLOATS, SerialChain, serial_chain, solve_fabrik, solve_jacobian
 from .result import History, IKResult, Target
 from .two_link import two_link
 
 Array = NDArray[np.float64]
+
+# Serial chains take the lean path of course.ik._serial (tests switch it off to compare).
+_FAST_PATH = True
 
 METHODS = ("two_link", "ccd", "fabrik", "jacobian_transpose", "pseudo_inverse", "dls")
 # Iteration budgets: Jacobian transpose converges linearly and slowly near the target.
@@ -106,10 +110,10 @@ def solve(
     local = as_array(local_rotations, "local_rotations", (4,))
     if local.ndim not in (2, 3) or local.shape[-2] != J:
         raise ValueError(f"local_rotations: expected shape ([B,] {J}, 4), got {local.shape}")
-    qn = np.linalg.norm(local, axis=-1, keepdims=True)
-    if np.any(qn < 1e-12):
+    qn2 = (local * local).sum(-1)
+    if qn2.min() < 1e-24:
         raise ValueError("local_rotations: contains a zero quaternion, which is no rotation")
-    local = local / qn
+    local = local / np.sqrt(qn2)[..., None]
     root_pos = as_array(root_position, "root_position", (3,))
     if root_pos.ndim > 2:
         raise ValueError(f"root_position: expected shape ([B,] 3), got {root_pos.shape}")
@@ -131,15 +135,32 @@ def solve(
     if k in pos_t or k in rot_t:
         raise ValueError(f"root: joint {skeleton.names[k]!r} is fixed, it cannot also be a target")
 
-    arrays = [local[..., 0, 0], root_pos[..., 0]] + [a[..., 0] for a in pos_t.values()]
-    arrays += [a[..., 0] for a in rot_t.values()]
-    shape = np.broadcast_shapes(*(np.shape(a) for a in arrays))
+    leading = [local.shape[:-2], root_pos.shape[:-1]]
+    leading += [a.shape[:-1] for a in (*pos_t.values(), *rot_t.values())]
+    shape = np.broadcast_shapes(*leading) if any(leading) else ()
     if len(shape) > 1:
         raise ValueError(f"targets: leading shapes {shape} do not broadcast to one batch axis")
     batched = len(shape) == 1
     B = shape[0] if batched else 1
 
-    model = _model(skeleton, k, tuple(pos_t), tuple(rot_t))
+    model, serial = _model(skeleton, k, tuple(pos_t), tuple(rot_t))
+    col_weight = _weights(skeleton, model, weights)
+    hinge_limits, ball_limit = _limits(skeleton, model, limits)
+    limited = bool(limits)
+    max_iter = DEFAULT_MAX_ITER[method] if max_iter is None else int(max_iter)
+    if _FAST_PATH and serial is not None and (
+            method in jacobian.METHODS or (method == "fabrik" and serial.free_balls and not (
+                np.isfinite(ball_limit).any()))):
+        (j,) = pos_t
+        local_out, root_out, positions, history, frames = _solve_serial(
+            skeleton, serial, model, local, root_pos, k, pos_t[j], B, batched, method, tol,
+            max_iter, col_weight, serial.limits(hinge_limits, ball_limit) if limited else [],
+            record, **options)
+        unreachable = unreachable_targets(model, np.broadcast_to(pos_t[j], (B, 3))[:, None],
+                                          np.broadcast_to(positions[:, k], (B, 3)))
+        return _result(local_out, root_out, positions, history, unreachable, frames, tol,
+                       method, batched)
+
     local_b = np.broadcast_to(local, (B, J, 4)).copy()
     root_b = np.broadcast_to(root_pos, (B, 3)).copy()
     if k == 0:  # the world frame is held and joint 0 sits at the root position
@@ -159,15 +180,10 @@ def solve(
         if pos_t else np.zeros((B, 0, 3)),
         target_rot=np.stack([matrix_from_quat(np.broadcast_to(rot_t[j], (B, 4))) for j in rot_t],
                             1) if rot_t else np.zeros((B, 0, 3, 3)),
-        col_weight=_weights(skeleton, model, weights),
-        hinge_limits=np.full((len(model.var_nodes), 2), [-np.inf, np.inf]),
-        ball_limit=np.full(len(model.var_nodes), np.inf),
+        col_weight=col_weight, hinge_limits=hinge_limits, ball_limit=ball_limit,
     )
-    _set_limits(skeleton, problem, limits)
-    if not pos_t:
-        problem.target_pos = np.zeros((B, 0, 3))
+    problem.Rn = problem.project(problem.Rn)
 
-    max_iter = DEFAULT_MAX_ITER[method] if max_iter is None else int(max_iter)
     if method == "two_link":
         Rn_out, history, frames = _two_link(problem, tol, record, **options)
     elif method == "ccd":
@@ -180,29 +196,36 @@ def solve(
                                                          record=record, **options)
 
     pose = _pose(skeleton, model, local_b, root_b, Q_k, p_k, Rn_out)
-    reason = history.reasons(problem.unreachable() if len(model.effectors) else np.zeros(B, bool))
-    recorded = None
+    recorded = []
     if record:
         T = len(frames)
         stacked = _pose(skeleton, model, np.tile(local_b, (T, 1, 1)), np.tile(root_b, (T, 1)),
                         None if Q_k is None else np.tile(Q_k, (T, 1)), np.tile(p_k, (T, 1)),
                         np.concatenate(frames, 0))
-        recorded = [
-            {"positions": _unbatch(stacked[2][t * B:(t + 1) * B], batched),
-             "local_rotations": _unbatch(stacked[0][t * B:(t + 1) * B], batched)}
-            for t in range(T)
-        ]
+        recorded = [(stacked[0][t * B:(t + 1) * B], stacked[2][t * B:(t + 1) * B])
+                    for t in range(T)]
+    unreachable = problem.unreachable() if len(model.effectors) else np.zeros(B, bool)
+    return _result(*pose, history, unreachable, recorded if record else None, tol, method,
+                   batched)
+
+
+def _result(local: Array, root_pos: Array, positions: Array, history: History,
+            unreachable: Array, frames: list[tuple[Array, Array]] | None, tol: float,
+            method: str, batched: bool) -> IKResult:
+    """The :class:`IKResult` of batched (B, ...) arrays; ``frames`` are (local, positions)."""
     residuals = np.stack(history.residuals)
     return IKResult(
-        local_rotations=_unbatch(pose[0], batched),
-        root_position=_unbatch(pose[1], batched),
-        positions=_unbatch(pose[2], batched),
+        local_rotations=_unbatch(local, batched),
+        root_position=_unbatch(root_pos, batched),
+        positions=_unbatch(positions, batched),
         converged=_unbatch(history.error < tol, batched),
         iterations=_unbatch(history.iterations, batched),
         residuals=residuals if batched else residuals[:, 0],
-        reason=_unbatch(reason, batched),
+        reason=_unbatch(history.reasons(unreachable), batched),
         method=method,
-        frames=recorded,
+        frames=None if frames is None else [
+            {"positions": _unbatch(p, batched), "local_rotations": _unbatch(q, batched)}
+            for q, p in frames],
     )
 
 
@@ -224,13 +247,16 @@ def _split_target(value: Any) -> tuple[Any, Any]:
 
 @lru_cache(maxsize=128)
 def _cached_model(parents: tuple, offsets: bytes, kinds: tuple, root: int, eff: tuple,
-                  reff: tuple) -> ChainModel:
+                  reff: tuple) -> tuple[ChainModel, SerialChain | None]:
     off = np.frombuffer(offsets).reshape(-1, 3)
-    return build_model(np.array(parents), off, list(kinds), root, list(eff), list(reff))
+    model = build_model(np.array(parents), off, list(kinds), root, list(eff), list(reff))
+    return model, serial_chain(model)
 
 
-def _model(skeleton: Any, root: int, eff: tuple, reff: tuple) -> ChainModel:
-    """The (cached) model: a slider calls ``solve`` with the same skeleton over and over."""
+def _model(skeleton: Any, root: int, eff: tuple,
+           reff: tuple) -> tuple[ChainModel, SerialChain | None]:
+    """The (cached) model, and its serial chain if it is one: a slider calls ``solve`` with the
+    same skeleton over and over."""
     kinds = []
     for t in skeleton.joint_types:
         axis = getattr(t, "axis", None)
@@ -250,8 +276,10 @@ def _weights(skeleton: Any, model: ChainModel, weights: Mapping | None) -> Array
     return w
 
 
-def _set_limits(skeleton: Any, problem: Problem, limits: Mapping | None) -> None:
-    m = problem.model
+def _limits(skeleton: Any, m: ChainModel, limits: Mapping | None) -> tuple[Array, Array]:
+    """Hinge ranges (V, 2) and ball caps (V,) of the variables (``±inf`` / ``inf``: free)."""
+    hinge_limits = np.full((len(m.var_nodes), 2), [-np.inf, np.inf])
+    ball_limit = np.full(len(m.var_nodes), np.inf)
     var_joint = m.edge_joint[m.var_nodes]
     for key, value in (limits or {}).items():
         j = skeleton.index(key)
@@ -261,13 +289,13 @@ def _set_limits(skeleton: Any, problem: Problem, limits: Mapping | None) -> None
             lo, hi = (float(x) for x in np.broadcast_to(np.asarray(value, float), (2,)))
             if not lo <= hi:
                 raise ValueError(f"limits[{key!r}]: a hinge range needs lo <= hi, got {value!r}")
-            problem.hinge_limits[v] = (lo, hi)
+            hinge_limits[v] = (lo, hi)
         else:
             if np.ndim(value) != 0 or not value >= 0:
                 raise ValueError(f"limits[{key!r}]: a ball joint takes one largest angle "
                                  f"(radians, >= 0), got {value!r}")
-            problem.ball_limit[v] = float(value)
-    problem.Rn = problem.project(problem.Rn)
+            ball_limit[v] = float(value)
+    return hinge_limits, ball_limit
 
 
 def _pose(skeleton: Any, model: ChainModel, local: Array, root_pos: Array, Qk: Array | None,
@@ -312,3 +340,65 @@ def _two_link(problem: Problem, tol: float, record: bool, pole: ArrayLike | None
     Rn = problem.fit(problem.Rn, np.stack([p[:, 0], b, c], 1))
     history.update(problem.error(*problem.forward(Rn))[1])
     return Rn, history, [problem.Rn, Rn] if record else []
+
+
+def _solve_serial(
+    skeleton: Any, chain: SerialChain, model: ChainModel, local: Array, root_pos: Array, k: int,
+    target: Array, B: int, batched: bool, method: str, tol: float, max_iter: int,
+    col_weight: Array, limits: list[tuple], record: bool, damping: float | None = None,
+    rcond: float = 1e-6, max_step: float = 0.5,
+) -> tuple[Array, Array, Array, History, list[tuple[Array, Array]] | None]:
+    """A Jacobian method or FABRIK on a serial chain (:mod:`course.ik._serial`), one problem
+    in Python floats or a batch on component arrays. Returns local rotations, root position and
+    positions, all (B, ...), the history and the recorded (local, positions) frames."""
+    from course import fk
+
+    ops = ARRAYS if batched else FLOATS
+    J, n = skeleton.n_joints, len(chain.joints)
+    local = local.reshape(1, J, 4) if B == 1 else np.broadcast_to(local, (B, J, 4))
+    root_pos = root_pos.reshape(1, 3) if B == 1 else np.broadcast_to(root_pos, (B, 3))
+    if k == 0:  # the world frame is held and joint 0 sits at the root position
+        base, p0 = (1.0, 0.0, 0.0, 0.0), _components(root_pos, ops)
+    else:
+        positions, orientations = fk.forward_kinematics(skeleton.parents, skeleton.offsets,
+                                                        local, root_pos)
+        base = _components(orientations[:, skeleton.parents[k]], ops)
+        p0 = _components(positions[:, k], ops)
+    start = local[:, list(chain.joints)]  # (B, n, 4)
+    R = [_components(start[:, i], ops) for i in range(n)]
+    if limits:
+        R = chain.project(R, limits, ops)
+    target = _components(np.broadcast_to(target, (B, 3)), ops)
+    if method == "fabrik":
+        R, history, frames = solve_fabrik(chain, R, base, p0, target, tol, max_iter, record, ops)
+    else:
+        if damping is None:
+            damping = 0.05 * max(float(model.reach_far.max()), 1e-9)
+        R, history, frames = solve_jacobian(
+            chain, R, base, p0, target, method, tol, max_iter,
+            inv_w2=tuple((1.0 / col_weight**2).tolist()), damping=damping, rcond=rcond,
+            max_step=max_step, limits=limits, record=record, ops=ops)
+
+    covers = chain.joints == tuple(range(J))  # a chain skeleton: its FK is the chain's
+
+    def pose(R: list) -> tuple[Array, Array]:
+        q = ops.stack(R, B)  # (B, n, 4)
+        q /= np.linalg.norm(q, axis=-1, keepdims=True)
+        q *= np.where(np.einsum("bni,bni->bn", q, start) < 0, -1.0, 1.0)[..., None]
+        out = local.copy()
+        out[:, list(chain.joints)] = q
+        if covers:
+            _, P = chain.forward(R, base, p0)
+            return out, ops.stack(P, B)
+        return out, fk.forward_kinematics(skeleton.parents, skeleton.offsets, out, root_pos)[0]
+
+    local_out, positions = pose(R)
+    recorded = [pose(f) for f in frames] if record else None
+    return local_out, root_pos.copy(), positions, history, recorded
+
+
+def _components(a: Array, ops: Any) -> tuple:
+    """(B, c) -> c components: floats for one problem, contiguous (B,) rows for a batch."""
+    if ops is FLOATS:
+        return tuple(a[0].tolist())
+    return tuple(np.ascontiguousarray(a.T))

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._chains import Problem
+from ._serial import ARRAYS, fabrik_points
 from ._small import TINY, norm
 from .result import History
 
@@ -95,38 +96,14 @@ def fabrik_batch(
 
 
 def _fabrik_chain(P: Array, t: Array, tol: float, max_iter: int) -> tuple[Array, Array]:
-    """In-place FABRIK on (B, n, 3) chains; returns iterations and errors, both (B,)."""
-    B, n, _ = P.shape
-    d = norm(np.diff(P, axis=1))  # (B, n-1) bone lengths
-    root = P[:, 0].copy()
-    # Where two joints coincide the pull direction is undefined; use the initial bone's.
-    rest = np.diff(P, axis=1)
-    rest = np.where(d[..., None] > TINY, rest / np.maximum(d, TINY)[..., None], [0.0, 1.0, 0.0])
-    reach = d.sum(axis=1)
-    to_target = t - root
-    far = norm(to_target) > reach
-    if far.any():  # unreachable: one pass, stretched straight at the target
-        u = to_target[far] / norm(to_target[far])[..., None]
-        cum = np.concatenate([np.zeros((far.sum(), 1)), np.cumsum(d[far], axis=1)], 1)
-        P[far] = root[far, None] + cum[..., None] * u[:, None]
-    err = norm(P[:, -1] - t)
-    its = far.astype(int)
-    active = ~far & (err >= tol)
-    for _ in range(max_iter):
-        if not active.any():
-            break
-        idx = np.flatnonzero(active)
-        Q, tt, dd, rr = P[idx], t[idx], d[idx], rest[idx]
-        Q[:, -1] = tt  # forward reaching
-        for i in range(n - 2, -1, -1):
-            Q[:, i] = _toward(Q[:, i + 1], Q[:, i], dd[:, i], -rr[:, i])
-        Q[:, 0] = root[idx]  # backward reaching
-        for i in range(n - 1):
-            Q[:, i + 1] = _toward(Q[:, i], Q[:, i + 1], dd[:, i], rr[:, i])
-        P[idx] = Q
-        its[idx] += 1
-        err[idx] = norm(Q[:, -1] - tt)
-        active[idx] = err[idx] >= tol
+    """In-place FABRIK on (B, n, 3) chains; returns iterations and errors, both (B,).
+
+    Runs :func:`course.ik._serial.fabrik_points` on component-major storage (each coordinate
+    of each joint one contiguous (B,) row)."""
+    comps = np.array(P.transpose(1, 2, 0))  # (n, 3, B), a copy the solver may write into
+    points, its, err = fabrik_points([tuple(c) for c in comps],
+                                     tuple(np.array(t.T)), tol, max_iter, ARRAYS)
+    P[:] = np.moveaxis(np.array(points), -1, 0)
     return its, err
 
 

@@ -155,6 +155,17 @@ def dls_step(
     return (np.swapaxes(JD, -1, -2) @ y)[..., 0]
 
 
+def lost_rank(J: Array, rcond: float = 1e-6) -> NDArray[np.bool_]:
+    r"""Whether each Jacobian ``J`` (..., m, n) has lost rank: its
+    :math:`\min(m, n)`-th singular value is at most ``rcond`` times the largest. There the
+    error components along the lost directions cannot be reduced by any small step."""
+    rank = min(J.shape[-2:])
+    if rank == 0:
+        return np.zeros(J.shape[:-2], dtype=bool)
+    s = np.linalg.svd(J, compute_uv=False)
+    return s[..., rank - 1] <= rcond * s[..., 0]
+
+
 def solve_problem(
     problem: Problem,
     method: str,
@@ -223,4 +234,6 @@ def solve_problem(
         history.update(err)
         if record:
             frames.append(Rn)
+    if m.n_cols and not history.converged.all():
+        history.singular = lost_rank(m.jacobian(M, p, problem.base), rcond)
     return Rn, history, frames

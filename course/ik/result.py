@@ -45,8 +45,10 @@ class IKResult:
         Largest effector error before the first and after every iteration.
     reason : str or ndarray of str, shape (B,)
         ``""`` when converged, else ``"unreachable"`` (no pose reaches: the best, stretched
-        pose is returned), ``"max_iterations"``, ``"stalled"`` (no more progress: a local
-        minimum or a constrained chain) or ``"singular"``.
+        pose is returned), ``"singular"`` (a Jacobian method stopped where the Jacobian has
+        lost rank, so no step can reduce the remaining error: e.g. a straight chain and a
+        target along it), ``"max_iterations"`` or ``"stalled"`` (no more progress: a local
+        minimum or a constrained chain).
     frames : list of dict, optional
         With ``record=True``: the pose before the first and after every iteration, each a
         dict with ``"positions"`` ``([B,] J, 3)`` and ``"local_rotations"`` ``([B,] J, 4)``.
@@ -86,6 +88,8 @@ class History:
         self.iterations = np.zeros(err.shape, dtype=int)
         self.stalled = np.zeros(err.shape, dtype=bool)
         self.active = (err >= tol) & (max_iter > 0)
+        # Set by the Jacobian methods: the final Jacobian has lost rank.
+        self.singular = np.zeros(err.shape, dtype=bool)
 
     def update(self, err: Array) -> Array:
         prev = self.residuals[-1]
@@ -102,10 +106,15 @@ class History:
     def error(self) -> Array:
         return self.residuals[-1]
 
+    @property
+    def converged(self) -> Array:
+        return self.error < self.tol
+
     def reasons(self, unreachable: Array) -> NDArray[np.str_]:
         """Why each problem stopped: ``""`` converged, else the most informative reason."""
-        converged = self.error < self.tol
+        converged = self.converged
         out = np.where(self.stalled, "stalled", "max_iterations").astype("<U14")
+        out[self.singular] = "singular"
         out[unreachable & ~converged] = "unreachable"
         out[converged] = ""
         return out

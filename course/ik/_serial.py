@@ -1,0 +1,603 @@
+r"""The fast path: one serial chain from the fixed joint to one position target.
+
+This is the common case (a notebook's arm, a benchmark chain, a leg from the hips): the path
+is ``node 0 -> node 1 -> ... -> node n-1`` (the effector), every node's local rotation
+:math:`R_i` is a hinge, a ball or fixed, and there is one position target. The lecture's
+forward kinematics on it,
+
+.. math::
+    Q_i = Q_{i-1} R_i,\qquad p_i = p_{i-1} + Q_{i-1}\, l_i \qquad (Q_{-1} = \text{base}),
+
+is written here on quaternions and 3-vectors held as tuples of *components*: a vector is
+``(x, y, z)``, a quaternion ``(w, x, y, z)``, and each component is either a Python float (one
+problem: plain float arithmetic costs ~50 ns where a numpy call on a tiny array costs ~1 µs)
+or an ndarray of shape ``(B,)`` (a batch: every line is then one vectorised, contiguous
+operation over all ``B`` problems). The same code runs both ways; ``ops`` (:data:`FLOATS` or
+:data:`ARRAYS`) supplies the handful of functions that differ (``sqrt``, ``where``, ...).
+
+The solvers here are the same methods as :mod:`course.ik.jacobian` and :mod:`course.ik.fabrik`
+on the general :class:`~course.ik._chains.Problem` (tests check both give the same answer):
+the Jacobian columns are :math:`a_i\times(e - r_i)` (hinge, world axis
+:math:`a_i = Q_{i-1}\hat a_i`) or the three world axes :math:`x, y, z` crossed with
+:math:`e - r_i` (ball), and a hinge step is :math:`R_i \leftarrow \exp(\delta\,\hat a_i) R_i`,
+a ball step :math:`R_i \leftarrow \exp(Q_{i-1}^{-1}\delta) R_i`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import reduce
+from typing import Any
+
+import numpy as np
+
+from ._small import TINY
+from .jacobian import lost_rank
+from .result import History
+
+Scalar = Any  # a float, or an ndarray (B,)
+Vec = tuple  # (x, y, z) of Scalars
+Quat = tuple  # (w, x, y, z) of Scalars
+
+
+# --------------------------------------------------------------------------- ops
+class _Floats:
+    """Component operations for one problem in Python floats."""
+
+    sqrt, sin, cos, atan2 = (staticmethod(f) for f in (math.sqrt, math.sin, math.cos,
+                                                       math.atan2))
+    abs = staticmethod(abs)
+
+    @staticmethod
+    def where(c: bool, a: Any, b: Any) -> Any:
+        return a if c else b
+
+    select = where  # whole structures (tuples of components) at once
+
+    @staticmethod
+    def maximum(a: float, b: float) -> float:
+        return a if a > b else b
+
+    @staticmethod
+    def minimum(a: float, b: float) -> float:
+        return a if a < b else b
+
+    @staticmethod
+    def batch(x: Any) -> np.ndarray:
+        return np.array([x])
+
+    @staticmethod
+    def flag(mask: np.ndarray) -> bool:
+        return bool(mask[0])
+
+    @staticmethod
+    def symmetric(A: tuple) -> np.ndarray:
+        a00, a01, a02, a11, a12, a22 = A
+        return np.array([[a00, a01, a02], [a01, a11, a12], [a02, a12, a22]])
+
+    @staticmethod
+    def vector(x: np.ndarray) -> Vec:
+        return tuple(x.tolist())
+
+    @staticmethod
+    def stack(items: list[tuple], batch: int) -> np.ndarray:
+        return np.array(items)[None]
+
+    @staticmethod
+    def both(a: bool, b: bool) -> bool:
+        return a and b
+
+    @staticmethod
+    def invert(a: bool) -> bool:
+        return not a
+
+    @staticmethod
+    def any(a: bool) -> bool:
+        return a
+
+    all = any
+
+    @staticmethod
+    def take(x: Any, idx: Any) -> Any:
+        return x
+
+    @staticmethod
+    def copy(x: Any) -> Any:
+        return x  # floats and tuples are immutable
+
+    @staticmethod
+    def put(full: Any, idx: Any, part: Any) -> Any:
+        return part
+
+
+class _Arrays:
+    """Component operations for a batch: every component an ndarray (B,)."""
+
+    sqrt, sin, cos, atan2, abs = (staticmethod(f) for f in (np.sqrt, np.sin, np.cos, np.arctan2,
+                                                            np.abs))
+    where, maximum, minimum = (staticmethod(f) for f in (np.where, np.maximum, np.minimum))
+
+    @staticmethod
+    def select(c: np.ndarray, a: Any, b: Any) -> Any:
+        if isinstance(a, tuple | list):
+            return type(a)(_Arrays.select(c, x, y) for x, y in zip(a, b, strict=True))
+        return np.where(c, a, b)
+
+    @staticmethod
+    def batch(x: np.ndarray) -> np.ndarray:
+        return x
+
+    @staticmethod
+    def flag(mask: np.ndarray) -> np.ndarray:
+        return mask
+
+    @staticmethod
+    def symmetric(A: tuple) -> np.ndarray:
+        a00, a01, a02, a11, a12, a22 = np.broadcast_arrays(*A)
+        return np.stack([np.stack([a00, a01, a02], -1), np.stack([a01, a11, a12], -1),
+                         np.stack([a02, a12, a22], -1)], -2)
+
+    @staticmethod
+    def vector(x: np.ndarray) -> Vec:
+        return tuple(np.moveaxis(x, -1, 0))
+
+    @staticmethod
+    def stack(items: list[tuple], batch: int) -> np.ndarray:
+        return np.stack([np.stack([np.broadcast_to(c, (batch,)) for c in x], -1)
+                         for x in items], 1)
+
+    both, invert = staticmethod(np.logical_and), staticmethod(np.logical_not)
+
+    @staticmethod
+    def any(a: np.ndarray) -> bool:
+        return bool(a.any())
+
+    @staticmethod
+    def all(a: np.ndarray) -> bool:
+        return bool(np.all(a))
+
+    @staticmethod
+    def take(x: Any, idx: np.ndarray) -> Any:
+        """``x[idx]`` for every array in a structure (the problems still running)."""
+        if isinstance(x, tuple | list):
+            return type(x)(_Arrays.take(c, idx) for c in x)
+        return x[idx] if isinstance(x, np.ndarray) and x.ndim else x
+
+    @staticmethod
+    def copy(x: Any) -> Any:
+        if isinstance(x, tuple | list):
+            return type(x)(_Arrays.copy(c) for c in x)
+        return x.copy() if isinstance(x, np.ndarray) else x
+
+    @staticmethod
+    def put(full: Any, idx: np.ndarray, part: Any) -> Any:
+        """``full[idx] = part`` for every array in a structure, in place."""
+        if isinstance(full, tuple | list):
+            for f, q in zip(full, part, strict=True):
+                _Arrays.put(f, idx, q)
+        else:
+            full[idx] = part
+        return full
+
+
+FLOATS, ARRAYS = _Floats(), _Arrays()
+
+
+# --------------------------------------------------------------------------- vectors
+def add(a: Vec, b: Vec) -> Vec:
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def sub(a: Vec, b: Vec) -> Vec:
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def scale(a: Vec, s: Scalar) -> Vec:
+    return (a[0] * s, a[1] * s, a[2] * s)
+
+
+def dot(a: Vec, b: Vec) -> Scalar:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross(a: Vec, b: Vec) -> Vec:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def qmul(a: Quat, b: Quat) -> Quat:
+    """Hamilton product :math:`a b` (rotate by ``b``, then ``a``)."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
+
+
+def qconj(q: Quat) -> Quat:
+    return (q[0], -q[1], -q[2], -q[3])
+
+
+def qrot(q: Quat, v: Vec) -> Vec:
+    r""":math:`q v q^*` as :math:`v + w t + u\times t`, :math:`t = 2u\times v`,
+    :math:`u = (x, y, z)` (written out: this is the innermost operation)."""
+    w, x, y, z = q
+    vx, vy, vz = v
+    tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
+    return (vx + w * tx + y * tz - z * ty, vy + w * ty + z * tx - x * tz,
+            vz + w * tz + x * ty - y * tx)
+
+
+def axis_turn(axis: Vec, angle: Scalar, ops: Any) -> Quat:
+    """Turn by ``angle`` about the unit ``axis`` (a constant)."""
+    s = ops.sin(0.5 * angle)
+    return (ops.cos(0.5 * angle), axis[0] * s, axis[1] * s, axis[2] * s)
+
+
+def rotvec_turn(r: Vec, ops: Any) -> Quat:
+    r""":math:`\exp(r)`: turn by :math:`\lVert r\rVert` about :math:`\hat r` (identity at 0)."""
+    theta = ops.sqrt(dot(r, r))
+    safe = ops.where(theta > 1e-8, theta, 1.0)
+    k = ops.where(theta > 1e-8, ops.sin(0.5 * safe) / safe, 0.5)
+    return (ops.cos(0.5 * theta), r[0] * k, r[1] * k, r[2] * k)
+
+
+def arc_turn(u: Vec, v: Vec, ops: Any) -> Quat:
+    r"""Shortest arc taking direction ``u`` onto ``v``: :math:`(\lVert u\rVert\lVert v\rVert +
+    u\cdot v,\ u\times v)` normalised; a half turn about an axis perpendicular to ``u`` when
+    they are opposite; the identity when either is zero."""
+    nn = ops.sqrt(dot(u, u) * dot(v, v))
+    w, (x, y, z) = nn + dot(u, v), cross(u, v)
+    # Opposite: any axis perpendicular to u (cross u with x, or with y if u is along x).
+    along_x = ops.abs(u[0]) * ops.abs(u[0]) > 0.5 * dot(u, u)
+    px, py, pz = ops.where(along_x, -u[2], 0.0), ops.where(along_x, 0.0, u[2]), \
+        ops.where(along_x, u[1], -u[1])
+    opposite = w <= TINY * nn
+    w, x, y, z = (ops.where(opposite, 0.0, w), ops.where(opposite, px, x),
+                  ops.where(opposite, py, y), ops.where(opposite, pz, z))
+    n = ops.sqrt(w * w + x * x + y * y + z * z)
+    degenerate = n <= TINY * TINY
+    inv = 1.0 / ops.where(degenerate, 1.0, n)
+    return (ops.where(degenerate, 1.0, w * inv), x * inv, y * inv, z * inv)
+
+
+# --------------------------------------------------------------------------- the chain
+@dataclass(frozen=True)
+class SerialChain:
+    """A chain ``node 0 -> ... -> node n-1`` (the effector); see the module docstring."""
+
+    joints: tuple[int, ...]  # skeleton joint of every node
+    bones: tuple[Vec, ...]  # l_i: node i in node i-1's frame (zero for node 0)
+    variables: tuple[int, ...]  # nodes whose local rotation the solve changes
+    axes: tuple[Vec | None, ...]  # per variable: hinge axis (in the parent frame) or None
+
+    @property
+    def free_balls(self) -> bool:
+        """Every bone turns freely: nodes 0..n-2 are all ball joints (FABRIK's own case)."""
+        return (self.variables == tuple(range(len(self.joints) - 1))
+                and all(a is None for a in self.axes))
+
+    def forward(self, R: list[Quat], base: Quat, p0: Vec) -> tuple[list[Quat], list[Vec]]:
+        r"""Global orientations and positions, :math:`Q_i = Q_{i-1}R_i`,
+        :math:`p_i = p_{i-1} + Q_{i-1} l_i`."""
+        Q, P = [], []
+        q, p = base, p0
+        for i, (r, bone) in enumerate(zip(R, self.bones, strict=True)):
+            if i:
+                p = add(p, qrot(q, bone))
+            q = qmul(q, r)
+            Q.append(q)
+            P.append(p)
+        return Q, P
+
+    def columns(self, Q: list[Quat], P: list[Vec], base: Quat) -> list[Vec]:
+        r"""Jacobian columns :math:`a\times(e - r_i)`: the world hinge axis
+        :math:`a = Q_{i-1}\hat a`, or the world x, y and z axes for a ball joint."""
+        e, cols = P[-1], []
+        for v, axis in zip(self.variables, self.axes, strict=True):
+            rx, ry, rz = sub(e, P[v])
+            if axis is None:
+                cols += [(0.0, -rz, ry), (rz, 0.0, -rx), (-ry, rx, 0.0)]
+            else:
+                cols.append(cross(qrot(Q[v - 1] if v else base, axis), (rx, ry, rz)))
+        return cols
+
+    def step(self, R: list[Quat], Q: list[Quat], base: Quat, delta: list[Scalar],
+             ops: Any) -> list[Quat]:
+        r"""Turn the variables by ``delta`` (one entry per column): a hinge
+        :math:`R \leftarrow \exp(\delta\hat a) R`, a ball by the world rotation vector
+        :math:`\delta` applied to :math:`Q_i`, i.e. :math:`R \leftarrow
+        \exp(Q_{i-1}^{-1}\delta) R`."""
+        R, c = list(R), 0
+        for v, axis in zip(self.variables, self.axes, strict=True):
+            if axis is None:
+                local = qrot(qconj(Q[v - 1] if v else base), tuple(delta[c:c + 3]))
+                turn, c = rotvec_turn(local, ops), c + 3
+            else:
+                turn, c = axis_turn(axis, delta[c], ops), c + 1
+            R[v] = qmul(turn, R[v])
+        return R
+
+    def limits(self, hinge_limits: np.ndarray, ball_limit: np.ndarray) -> list[tuple]:
+        """Per variable with a limit, ``(node, axis, lo, hi)`` (hinge) or ``(node, None, cap,
+        None)`` (ball), as floats: prepared once per solve for :meth:`project`."""
+        out = []
+        for i, (v, axis) in enumerate(zip(self.variables, self.axes, strict=True)):
+            if axis is not None and np.isfinite(hinge_limits[i]).any():
+                out.append((v, axis, float(hinge_limits[i, 0]), float(hinge_limits[i, 1])))
+            elif axis is None and np.isfinite(ball_limit[i]):
+                out.append((v, None, float(ball_limit[i]), None))
+        return out
+
+    @staticmethod
+    def project(R: list[Quat], limits: list[tuple], ops: Any) -> list[Quat]:
+        r"""Variables projected into their :meth:`limits`: a hinge's angle
+        :math:`\theta = \mathrm{atan2}(2w\,(v\cdot\hat a),\ w^2 - \lVert v\rVert^2)` clipped to
+        ``[lo, hi]``; a ball's rotation angle :math:`2\,\mathrm{atan2}(\lVert v\rVert, |w|)`
+        capped, keeping its axis."""
+        R = list(R)
+        for v, axis, lo, hi in limits:
+            w, x, y, z = R[v]
+            vv = x * x + y * y + z * z
+            if axis is not None:
+                theta = ops.atan2(2.0 * w * dot((x, y, z), axis), w * w - vv)
+                fix = ops.minimum(ops.maximum(theta, lo), hi) - theta
+                R[v] = qmul(axis_turn(axis, fix, ops), R[v])
+            else:
+                s = ops.sqrt(vv)
+                over = 2.0 * ops.atan2(s, ops.abs(w)) > lo
+                k = math.sin(0.5 * lo) / ops.where(s > TINY, s, 1.0)
+                sign = ops.where(w < 0, -1.0, 1.0)
+                R[v] = (ops.where(over, sign * math.cos(0.5 * lo), w),
+                        ops.where(over, x * k, x), ops.where(over, y * k, y),
+                        ops.where(over, z * k, z))
+        return R
+
+
+def serial_chain(model: Any) -> SerialChain | None:
+    """The :class:`SerialChain` of a :class:`~course.ik._chains.ChainModel`, or None if its
+    paths are not one chain from the fixed joint (parent frame held) to a position target."""
+    n = model.n_nodes
+    if (not model.anchor_parent or len(model.rot_effectors) or len(model.effectors) != 1
+            or model.effectors[0] != n - 1 or np.any(model.parent[1:] != np.arange(n - 1))):
+        return None
+    axes = np.zeros((len(model.var_nodes), 3))
+    first = np.searchsorted(model.col_var, np.arange(len(model.var_nodes)))
+    axes[model.hinge] = model.col_axis[first[model.hinge]]
+    return SerialChain(
+        joints=tuple(int(j) for j in model.joints),
+        bones=tuple(tuple(float(c) for c in b) for b in model.bone),
+        variables=tuple(int(v) for v in model.var_nodes),
+        axes=tuple(tuple(float(c) for c in a) if h else None
+                   for a, h in zip(axes, model.hinge, strict=True)),
+    )
+
+
+# --------------------------------------------------------------------------- Jacobian methods
+def increment(cols: list[Vec], e: Vec, method: str, inv_w2: np.ndarray, damping: float,
+              rcond: float, ops: Any) -> list[Scalar]:
+    r"""The joint increment of a Jacobian method, :math:`\Delta\theta = W^{-2}J^T z`.
+
+    With :math:`A = JW^{-2}J^T` (3x3, built column by column), the three methods differ only
+    in :math:`z`: DLS :math:`z = (A + \lambda^2 I)^{-1}\Delta e` (closed form, by cofactors),
+    pseudo-inverse :math:`z = A^+\Delta e` (eigenvalues below :math:`\text{rcond}^2` times the
+    largest dropped, the same cut as :math:`\sigma < \text{rcond}\,\sigma_{max}` on
+    :math:`J`), transpose :math:`z = \alpha\Delta e` with Buss's
+    :math:`\alpha = \langle\Delta e, A\Delta e\rangle / \lVert A\Delta e\rVert^2`.
+    """
+    A = gram(cols, inv_w2)
+    if method == "dls":
+        z = _solve_sym(A, e, damping * damping, ops)
+    elif method == "pseudo_inverse" and ops.all(_well_conditioned(A, rcond)):
+        z = _solve_sym(A, e, 0.0, ops)  # no eigenvalue below the cut: A^+ = A^-1
+    elif method == "pseudo_inverse":
+        M = ops.symmetric(A)
+        lam, V = np.linalg.eigh(M)
+        keep = lam > rcond * rcond * lam[..., -1:]
+        inv = np.where(keep, 1.0 / np.where(keep, lam, 1.0), 0.0)
+        y = np.einsum("...ji,...j->...i", V, np.stack(np.broadcast_arrays(*e), -1))
+        z = ops.vector(np.einsum("...ij,...j->...i", V, inv * y))
+    else:
+        a00, a01, a02, a11, a12, a22 = A
+        Ae = (a00 * e[0] + a01 * e[1] + a02 * e[2], a01 * e[0] + a11 * e[1] + a12 * e[2],
+              a02 * e[0] + a12 * e[1] + a22 * e[2])
+        den = dot(Ae, Ae)
+        z = scale(e, dot(e, Ae) / ops.where(den > 0, den, 1.0))
+    return [dot(c, z) * iw for c, iw in zip(cols, inv_w2, strict=True)]
+
+
+def gram(cols: list[Vec], inv_w2: np.ndarray) -> tuple:
+    r""":math:`A = J W^{-2} J^T = \sum_c J_c J_c^T / w_c^2` as its six entries
+    ``(a00, a01, a02, a11, a12, a22)``."""
+    a00 = a01 = a02 = a11 = a12 = a22 = 0.0
+    for (x, y, z), iw in zip(cols, inv_w2, strict=True):
+        wx, wy, wz = x * iw, y * iw, z * iw
+        a00, a01, a02 = a00 + wx * x, a01 + wx * y, a02 + wx * z
+        a11, a12, a22 = a11 + wy * y, a12 + wy * z, a22 + wz * z
+    return a00, a01, a02, a11, a12, a22
+
+
+def _well_conditioned(A: tuple, rcond: float) -> Any:
+    r"""Whether no eigenvalue of the PSD ``A`` is below :math:`\text{rcond}^2\lambda_{max}`,
+    sufficient test: :math:`\lambda_{min}/\lambda_{max} \ge \det A / (\mathrm{tr} A)^3`."""
+    a00, a01, a02, a11, a12, a22 = A
+    det = (a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a02 * a12)
+           + a02 * (a01 * a12 - a02 * a11))
+    tr = a00 + a11 + a22
+    return det > rcond * rcond * tr * tr * tr
+
+
+def _solve_sym(A: tuple, e: Vec, lam2: float, ops: Any) -> Vec:
+    r""":math:`(A + \lambda^2 I)^{-1} e` for symmetric 3x3 ``A``, by the adjugate."""
+    a00, a01, a02, a11, a12, a22 = A
+    a00, a11, a22 = a00 + lam2, a11 + lam2, a22 + lam2
+    c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
+    c11, c12, c22 = a00 * a22 - a02 * a02, a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    inv = 1.0 / ops.where(ops.abs(det) > 1e-300, det, 1e-300)
+    x, y, z = e
+    return ((c00 * x + c01 * y + c02 * z) * inv, (c01 * x + c11 * y + c12 * z) * inv,
+            (c02 * x + c12 * y + c22 * z) * inv)
+
+
+def solve_jacobian(
+    chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, method: str,
+    tol: float, max_iter: int, *, inv_w2: np.ndarray, damping: float, rcond: float,
+    max_step: float, limits: list[tuple], record: bool, ops: Any,
+) -> tuple[list[Quat], History, list[list[Quat]]]:
+    """Iterate a Jacobian method, as :func:`course.ik.jacobian.solve_problem` does on the
+    general model: capped steps (``max_step``), backtracking (a step that raises the error is
+    undone and the next one halved), the shared :class:`History` bookkeeping.
+
+    Returns
+    -------
+    R : final local rotations of the nodes
+    history : History
+    frames : the local rotations before the first and after every iteration (``record``)
+    """
+    Q, P = chain.forward(R, base, p0)
+    e = sub(target, P[-1])
+    err = ops.sqrt(dot(e, e))
+    history = History(ops.batch(err), tol, max_iter)
+    frames = [R] if record else []
+    step_scale = 1.0
+    while history.active.any() and chain.variables:
+        delta = increment(chain.columns(Q, P, base), e, method, inv_w2, damping, rcond, ops)
+        big = reduce(ops.maximum, (ops.abs(d) for d in delta))
+        k = ops.minimum(1.0, max_step / ops.maximum(big, 1e-300)) * step_scale
+        k = k * ops.flag(history.active)
+        trial = chain.step(R, Q, base, [d * k for d in delta], ops)
+        if limits:
+            trial = chain.project(trial, limits, ops)
+        Q_t, P_t = chain.forward(trial, base, p0)
+        e_t = sub(target, P_t[-1])
+        err_t = ops.sqrt(dot(e_t, e_t))
+        worse = err_t > err
+        step_scale = ops.where(worse, 0.5 * step_scale, ops.minimum(1.0, 2.0 * step_scale))
+        R, Q, P, e, err = ops.select(worse, (R, Q, P, e, err), (trial, Q_t, P_t, e_t, err_t))
+        history.update(ops.batch(err))
+        if record:
+            frames.append(R)
+    if not history.converged.all():
+        cols = np.array([np.broadcast_arrays(*c) for c in chain.columns(Q, P, base)])
+        history.singular = lost_rank(np.moveaxis(cols.reshape(len(cols), 3, -1), -1, 0), rcond)
+    return R, history, frames
+
+
+# --------------------------------------------------------------------------- FABRIK
+def toward(frm: Vec, to: Vec, length: Scalar, fallback: Vec, ops: Any) -> Vec:
+    r""":math:`p_{frm} + d\,\widehat{(p_{to} - p_{frm})}`; along ``fallback`` (a unit vector)
+    where the two points coincide."""
+    dx, dy, dz = sub(to, frm)
+    n = ops.sqrt(dx * dx + dy * dy + dz * dz)
+    ok = n >= TINY
+    dx, dy, dz = ops.select(ok, (dx, dy, dz), fallback)
+    k = length / ops.where(ok, n, 1.0)
+    return (frm[0] + dx * k, frm[1] + dy * k, frm[2] + dz * k)
+
+
+def fabrik_pass(P: list[Vec], target: Vec, root: Vec, d: list[Scalar], rest: list[Vec],
+                ops: Any) -> list[Vec]:
+    r"""One FABRIK iteration: forward reaching (:math:`p_n \leftarrow t`, then
+    :math:`p_i \leftarrow p_{i+1} + d_i\,\widehat{(p_i - p_{i+1})}`), then backward reaching
+    (:math:`p_0 \leftarrow b`, then :math:`p_{i+1} \leftarrow p_i + d_i\,\widehat{(p_{i+1} -
+    p_i)}`). ``rest`` are the initial bone directions, used where two joints coincide."""
+    P = list(P)
+    P[-1] = target
+    for i in range(len(P) - 2, -1, -1):
+        P[i] = toward(P[i + 1], P[i], d[i], scale(rest[i], -1.0), ops)
+    P[0] = root
+    for i in range(len(P) - 1):
+        P[i + 1] = toward(P[i], P[i + 1], d[i], rest[i], ops)
+    return P
+
+
+def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any,
+                  frames: list | None = None) -> tuple[list[Vec], Any, Any]:
+    r"""FABRIK on chain points ``P`` (``P[0]`` fixed; bone lengths taken from them).
+
+    A target beyond the reach :math:`\sum d_i` is answered in one pass, the chain stretched
+    straight at it. A batch iterates only its problems still running. ``frames``, if given,
+    receives the points after every iteration.
+
+    Returns
+    -------
+    P : the final points
+    iterations, error : per problem
+    """
+    bones = [sub(b, a) for a, b in zip(P[:-1], P[1:], strict=True)]
+    d = [ops.sqrt(dot(b, b)) for b in bones]
+    rest = []
+    for (x, y, z), length in zip(bones, d, strict=True):
+        ok = length > TINY
+        inv = 1.0 / ops.where(ok, length, 1.0)
+        rest.append((ops.where(ok, x * inv, 0.0), ops.where(ok, y * inv, 1.0),
+                     ops.where(ok, z * inv, 0.0)))
+    root = P[0]
+    to_t = sub(target, root)
+    dist = ops.sqrt(dot(to_t, to_t))
+    far = dist > sum(d)
+    if ops.any(far):  # unreachable: stretched straight at the target
+        u, reach, straight = scale(to_t, 1.0 / ops.where(dist > TINY, dist, 1.0)), 0.0, [root]
+        for length in d:
+            reach = reach + length
+            straight.append(add(root, scale(u, reach)))
+        P = ops.select(far, straight, P)
+    e = sub(P[-1], target)
+    err = ops.sqrt(dot(e, e))
+    its = ops.where(far, 1, 0)
+    active = ops.both(ops.invert(far), err >= tol)
+    for _ in range(max_iter):
+        if not ops.any(active):
+            break
+        idx = np.flatnonzero(active) if ops is ARRAYS else None
+        Q, t = fabrik_pass(*ops.take((P, target, root, d, rest), idx), ops), ops.take(target, idx)
+        e = sub(Q[-1], t)
+        err_q = ops.sqrt(dot(e, e))
+        P = ops.put(P, idx, Q)
+        err = ops.put(err, idx, err_q)
+        its = ops.put(its, idx, ops.take(its, idx) + 1)
+        active = ops.put(active, idx, err_q >= tol)
+        if frames is not None:
+            frames.append(ops.copy(P))
+    return P, its, err
+
+
+def fit_chain(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, P_new: list[Vec],
+              ops: Any) -> list[Quat]:
+    r"""Local rotations that put a ball-joint chain on the points ``P_new`` (same bones): each
+    node's global orientation turned by the shortest arc from its old bone direction to the
+    new one, :math:`Q_i' = \mathrm{arc}(Q_i l_{i+1},\ p'_{i+1} - p'_i)\,Q_i` (so every bone
+    keeps its twist), then :math:`R_i' = Q_{i-1}'^{-1} Q_i'`."""
+    Q, _ = chain.forward(R, base, p0)
+    R, parent = list(R), base
+    for i in range(len(R) - 1):
+        turn = arc_turn(qrot(Q[i], chain.bones[i + 1]), sub(P_new[i + 1], P_new[i]), ops)
+        q = qmul(turn, Q[i])
+        R[i] = qmul(qconj(parent), q)
+        parent = q
+    return R
+
+
+def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
+                 max_iter: int, record: bool, ops: Any) -> tuple[list[Quat], History, list]:
+    """FABRIK on a chain of free ball joints: iterate on positions alone (:func:`fabrik_points`),
+    then fit the rotations once (:func:`fit_chain`; exact, the points keep the bones).
+    ``record`` fits every iteration's points too."""
+    _, P = chain.forward(R, base, p0)
+    e = sub(target, P[-1])
+    history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
+    points: list | None = [] if record else None
+    P_new, its, _ = fabrik_points(ops.copy(P), target, tol, max_iter, ops, points)
+    if record and len(points) < np.max(its):  # a stretch: answered before the loop
+        points.append(P_new)
+    frames = [R] + [fit_chain(chain, R, base, p0, f, ops) for f in (points if record else [P_new])]
+    R_new = frames[-1]
+    # Residuals of the fitted poses (honest: what the returned rotations reach).
+    for f in frames[1:] if record else frames[-1:]:
+        e = sub(target, chain.forward(f, base, p0)[1][-1])
+        history.residuals.append(ops.batch(ops.sqrt(dot(e, e))))
+    history.iterations = np.asarray(ops.batch(its), dtype=int)
+    history.active[:] = False
+    if not record:
+        frames = []
+    return R_new, history, frames
