@@ -38,7 +38,7 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"submission: {path} does not exist")
         result = run(spec, path, seed)
         print(result)
-        return 0 if result.score == result.max_score else 1
+        return 0 if result.score >= result.max_score else 1
     try:
         submissions = collect(args.submissions, spec.template)
     except ValueError as exc:

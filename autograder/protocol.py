@@ -5,7 +5,8 @@ frames only to a dedicated pipe (not stdout), so whatever a submission prints is
 mistaken for a result. Values cross as plain data:
 
 * grader to child, arguments: numbers, strings, and arrays as ``{"nd": [...], "shape": [...]}``;
-* child to grader, a returned value described by :func:`encode_value`, which the grader
+* child to grader, a returned value described by :func:`encode_value` (arrays, strings such
+  as joint names, and sequences of them), which the grader
   turns back into a :class:`Value` with :func:`decode_value` and validates (the child is
   untrusted: anything malformed is a :class:`ProtocolError`).
 
@@ -27,6 +28,7 @@ import numpy as np
 
 MAX_FRAME = 8 << 20  # a single rotation's answer is tiny; this only bounds garbage
 MAX_ITEMS = 1 << 20  # numbers in one returned array
+MAX_STR = 200  # characters kept of a returned string (a joint name, say)
 _asarray = np.asarray  # bound now: a submission may monkeypatch numpy later
 
 
@@ -81,15 +83,18 @@ def _read_exactly(fd: int, n: int, deadline: float | None) -> bytes | None:
 
 
 def encode_args(args: tuple[Any, ...]) -> list[Any]:
+    """Arrays as nested data; integer arrays (a skeleton's ``parents``) stay integers."""
     return [
-        {"nd": a.ravel().tolist(), "shape": list(a.shape)} if isinstance(a, np.ndarray) else a
+        {"nd": a.ravel().tolist(), "shape": list(a.shape),
+         "int": a.dtype.kind in "iu"} if isinstance(a, np.ndarray) else a
         for a in args
     ]
 
 
 def decode_args(args: list[Any]) -> list[Any]:
     return [
-        _asarray(a["nd"], dtype=np.float64).reshape(a["shape"]) if isinstance(a, dict) else a
+        _asarray(a["nd"], dtype=np.int64 if a.get("int") else np.float64).reshape(a["shape"])
+        if isinstance(a, dict) else a
         for a in args
     ]
 
@@ -101,6 +106,10 @@ def encode_value(x: Any, depth: int = 0) -> dict[str, Any]:
     """Describe what a student's function returned as plain JSON (runs in the child)."""
     if x is None:
         return {"kind": "none"}
+    if isinstance(x, (str, np.str_)):
+        return {"kind": "str", "value": str(x)[:MAX_STR]}
+    if isinstance(x, np.ndarray) and x.dtype.kind == "U" and x.ndim == 1 and len(x) <= 64:
+        return {"kind": "seq", "type": "ndarray", "items": [encode_value(i) for i in x]}
     if isinstance(x, (np.ndarray, np.generic, int, float)):
         return _encode_array(_asarray(x), type(x).__name__)
     if isinstance(x, (list, tuple)):
@@ -130,8 +139,8 @@ class Value:
     """A returned value as the grader sees it.
 
     ``kind`` is ``"array"`` (numbers; ``array`` holds them as float64 and ``dtype`` the
-    student's dtype), ``"seq"`` (a list/tuple of ``items`` that is not one array),
-    ``"none"``, or ``"other"`` (anything else; ``type_name`` says what).
+    student's dtype), ``"str"`` (``text``), ``"seq"`` (a list/tuple of ``items`` that is not
+    one array), ``"none"``, or ``"other"`` (anything else; ``type_name`` says what).
     """
 
     kind: str
@@ -139,6 +148,7 @@ class Value:
     array: np.ndarray | None = None
     dtype: str = ""
     items: tuple[Value, ...] = ()
+    text: str = ""
 
 
 def decode_value(obj: Any) -> Value:
@@ -150,6 +160,10 @@ def decode_value(obj: Any) -> Value:
             return Value("none", "NoneType")
         if kind == "other":
             return Value("other", type_name or "object")
+        if kind == "str":
+            if not isinstance(obj["value"], str):
+                raise ProtocolError("bad string")
+            return Value("str", "str", text=obj["value"][:MAX_STR])
         if kind == "seq":
             items = obj["items"]
             if not isinstance(items, list) or len(items) > 64:

@@ -59,6 +59,13 @@ def header(result: Result) -> list[str]:
     return lines
 
 
+def _scope(result: Result) -> str:
+    scope = "all tests" if result.hidden_run else "visible tests"
+    if result.bonus_score:
+        scope += f", including {_points(result.bonus_score)} bonus points"
+    return scope
+
+
 def text(result: Result, width: int = 100) -> str:
     """The terminal report."""
     out = header(result) + [""]
@@ -76,7 +83,7 @@ def text(result: Result, width: int = 100) -> str:
             indent = " " * (8 + len(line) - len(line.lstrip()))
             out += textwrap.wrap(line.strip(), width, initial_indent=indent,
                                  subsequent_indent=indent + "  ")
-    scope = "all tests" if result.hidden_run else "visible tests"
+    scope = _scope(result)
     out += ["", f"Score: {_points(result.score)} / {_points(result.max_score)} ({scope}), "
                 f"checked in {result.elapsed:.1f} s"]
     if result.output.strip():
@@ -98,7 +105,7 @@ def html(result: Result) -> str:
             f"{_points(t.score)}/{_points(t.test.points)}</td>"
             f"<td style='text-align:left;font-size:90%'>{detail}</td></tr>")
     head = "<br>".join(esc(s) for s in header(result))
-    scope = "all tests" if result.hidden_run else "visible tests"
+    scope = _scope(result)
     picture = ""
     from .figures import first_failure_png
 

@@ -95,7 +95,12 @@ class Result:
 
     @property
     def max_score(self) -> float:
-        return sum(t.test.points for t in self.tests)
+        """The points of all but the bonus tests."""
+        return sum(t.test.points for t in self.tests if not t.test.bonus)
+
+    @property
+    def bonus_score(self) -> float:
+        return sum(t.score for t in self.tests if t.test.bonus)
 
     def __str__(self) -> str:
         from .report import text
@@ -192,10 +197,10 @@ def _run_tests(assignment: Assignment, source: str, prepared: tuple[Prepared, ..
 def _judge(fn: Function, case: Case, expected: Any, out: Outcome, limits: Limits) -> CaseResult:
     if out.status == "ok":
         assert out.value is not None
-        v = fn.check.validate(fn.name, out.value)
+        v = fn.check.validate(fn.name, out.value, expected)
         if v.error:
             return CaseResult(case, "invalid", v.error, v.array, expected)
-        why = fn.check.compare(v.array, expected)
+        why = fn.check.judge(v.array, expected, case.args)
         if why is None:
             return CaseResult(case, "pass", got=v.array, expected=expected)
         got = fn.check.show_value(v.array)
@@ -226,7 +231,8 @@ def _error_text(error: dict[str, Any]) -> str:
 
 def diagnose(assignment: Assignment, fn: Function,
              cases: list[CaseResult]) -> Misconception | None:
-    """The first catalogued mistake that reproduces every failing case of a test, if any.
+    """The first catalogued mistake that reproduces (or shows the symptom of) every failing
+    case of a test, if any.
 
     Only outputs of the right shape can be compared; a test with an exception, a timeout or
     a wrong shape among its failures gets no diagnosis.
@@ -243,6 +249,8 @@ def diagnose(assignment: Assignment, fn: Function,
 def _reproduces(m: Misconception, fn: Function, c: CaseResult) -> bool:
     try:
         with np.errstate(all="ignore"):
+            if m.symptom is not None:
+                return bool(m.symptom(c.got, *c.case.args))
             wrong = m.wrong(*c.case.args)
     except Exception:  # a variant undefined on this input reproduces nothing
         return False
@@ -259,6 +267,13 @@ def describe_args(fn: Function, case: Case) -> str:
     parts = []
     for name, a in zip(fn.params, case.args, strict=True):
         text = show(a) if isinstance(a, np.ndarray) else f"{a:.4g}" if isinstance(a, float) else (
-            repr(a))
+            _short_text(a) if isinstance(a, str) else repr(a))
         parts.append(f"{name} = {text}")
     return ", ".join(parts)
+
+
+def _short_text(s: str, limit: int = 60) -> str:
+    """A long string argument (a BVH hierarchy) as its start and its number of lines."""
+    if len(s) <= limit:
+        return repr(s)
+    return f"{s[:limit]!r}... (a text of {len(s.splitlines())} lines)"

@@ -8,7 +8,9 @@ An assignment module (``autograder/assignments/a1.py``) builds one :class:`Assig
   fraction of cases passed); a test's ``cases(rng)`` builds its inputs, from a fixed seed
   for visible tests and from the instructor's secret seed for hidden ones;
 * a catalogue of :class:`Misconception` s: each a known-wrong variant of one function,
-  written as a function of the reference, which the diagnosis compares failing outputs to.
+  written as a function of the reference, which the diagnosis compares failing outputs to,
+  or, where a mistake has no single wrong output (an iterative solver), a *symptom*: a
+  predicate on the failing output and the call's arguments.
 
 Nothing here runs student code; the runner does, in a sandbox.
 """
@@ -52,7 +54,7 @@ class Test:
     """A named group of cases of one function, worth ``points``.
 
     ``hidden`` tests draw their cases from the secret seed and are shown to students only
-    after grades are published.
+    after grades are published. ``bonus`` points add to the score but not to the maximum.
     """
 
     name: str
@@ -60,6 +62,7 @@ class Test:
     points: float
     cases: Callable[[np.random.Generator], Sequence[Case]]
     hidden: bool = False
+    bonus: bool = False
 
 
 @dataclass(frozen=True)
@@ -67,14 +70,21 @@ class Misconception:
     """A known-wrong way to implement ``function``.
 
     ``wrong`` takes the same arguments as the function and returns what the mistaken
-    implementation would; ``explanation`` is one sentence with the lecture's formula.
+    implementation would; ``explanation`` is one sentence with the lecture's formula. When
+    the mistaken output is not one definite answer, ``symptom(got, *args) -> bool`` instead
+    recognises it (the root moved, the bone lengths came out reversed, ...).
     """
 
     key: str
     function: str
     title: str
     explanation: str
-    wrong: Callable[..., Any]
+    wrong: Callable[..., Any] | None = None
+    symptom: Callable[..., bool] | None = None
+
+    def __post_init__(self) -> None:
+        if (self.wrong is None) == (self.symptom is None):
+            raise ValueError(f"misconception {self.key!r}: give exactly one of wrong, symptom")
 
 
 @dataclass(frozen=True)

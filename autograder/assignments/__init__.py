@@ -10,7 +10,7 @@ from importlib import import_module
 
 from ..spec import Assignment
 
-KEYS = ("a1",)
+KEYS = ("a1", "a2", "a3")
 
 
 def load(key: str) -> Assignment:

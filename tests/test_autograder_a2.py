@@ -1,0 +1,160 @@
+"""The a2 (forward kinematics) autograder: its references against independent ones, its case
+generators, and fixture submissions (the reference, each catalogued mistake, partial and
+hostile work), each getting the right score and a specific message."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from autograder import Limits, check
+from autograder.assignments import load
+from autograder.runner import Result
+from autograder.spec import case_rng
+
+FIXTURES = Path(__file__).parent / "fixtures"
+ASSIGNMENTS = Path(__file__).parents[1] / "assignments"
+LIMITS = Limits(cpu_seconds=8, memory_mb=600, load_timeout=5.0, case_timeout=1.0)
+SEED = "fixture-seed-a2"
+A2 = load("a2")
+
+
+def fixture_submission(key: str, name: str, tmp_path: Path) -> Path:
+    """A fixture as a file; ``# extends: reference.py`` fixtures are appended to it."""
+    folder = FIXTURES / key
+    src = (folder / name).read_text()
+    if src.startswith("# extends: reference.py"):
+        src = (folder / "reference.py").read_text() + "\n\n" + src
+    path = tmp_path / f"{key}_submission.py"
+    path.write_text(src)
+    return path
+
+
+def expectation(key: str, name: str) -> tuple[str, str]:
+    """``(function, misconception key)`` from a mutant's ``# expect:`` line."""
+    found = re.search(r"# expect: (\S+)", (FIXTURES / key / name).read_text())
+    assert found, name
+    fn, mistake = found.group(1).split(":")
+    return fn, mistake
+
+
+def assert_diagnosed(result: Result, fn: str, key: str) -> None:
+    """Every failing test of ``fn`` names the mistake, the report says it, and only ``fn``
+    (and functions that call it) lost points."""
+    failing = [t for t in result.tests if t.status != "passed"]
+    own = [t for t in failing if t.test.function == fn]
+    assert own and all(t.misconception and t.misconception.key == key for t in own)
+    title = own[0].misconception.title
+    assert f"Likely mistake, {title}" in " ".join(str(result).split())
+    assert all(t.test.function in (fn, "trace_curve") for t in failing)
+
+
+def assert_catalogue_matches_fixtures(assignment, key: str) -> None:
+    mutants = sorted(p.name for p in (FIXTURES / key).glob("mutant_*.py"))
+    expected = {":".join(expectation(key, m)) for m in mutants}
+    assert expected == {f"{m.function}:{m.key}" for m in assignment.misconceptions}
+
+
+def visible_cases(assignment, fn: str):
+    tests = [t for t in assignment.tests if t.function == fn and not t.hidden]
+    return [c for t in tests for c in t.cases(case_rng(t, None))]
+
+
+# --- the references and the cases --------------------------------------------------------------
+
+
+def test_generated_hierarchies_parse_like_their_own_description():
+    from autograder.assignments.a2 import parse_reference, random_hierarchy
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 9, 25):
+        text = random_hierarchy(rng, n)
+        names, parents, offsets = parse_reference(text)
+        n_end = text.count("End Site")
+        assert len(names) == n + n_end == len(parents) == len(offsets)
+        assert parents[0] == -1 and all(parents[j] < j for j in range(1, len(parents)))
+        assert sum(name.endswith("_end") for name in names) == n_end
+        assert text.count("OFFSET") == len(names)
+
+
+def test_fk_reference_matches_the_recursion_written_out(shared_bvh_dir):
+    from course.bvh import load_bvh
+    from course.rotations import quat_mul, quat_rotate
+
+    motion = load_bvh(shared_bvh_dir / "cmu_12_01_walk.bvh")
+    fk = A2.function("forward_kinematics")
+    sk, f = motion.skeleton, 100
+    args = (np.asarray(sk.parents), sk.offsets, motion.local_rotations[f], motion.root_positions[f])
+    positions, orientations = fk.reference(*args)
+    P, Q = [motion.root_positions[f]], [motion.local_rotations[f, 0]]
+    for i in range(1, sk.n_joints):
+        p = sk.parents[i]
+        Q.append(quat_mul(Q[p], motion.local_rotations[f, i]))
+        P.append(P[p] + quat_rotate(Q[p], sk.offsets[i]))
+    np.testing.assert_allclose(positions, P, atol=1e-9)
+    assert fk.check.compare((positions, orientations), (np.array(P), -np.array(Q))) is None
+
+
+def test_real_files_are_among_the_visible_cases(shared_bvh_dir):
+    labels = [c.label for c in visible_cases(A2, "parse_bvh_hierarchy")]
+    assert "the CMU walk (12_01)" in labels
+    assert {f"edge case {p.name}" for p in (shared_bvh_dir / "edge_cases").glob("*.bvh")} <= set(
+        labels)
+    walk = next(c for c in visible_cases(A2, "parse_bvh_hierarchy") if "CMU" in c.label)
+    names, parents, _ = A2.function("parse_bvh_hierarchy").reference(*walk.args)
+    assert len(names) == 38 and "LeftHand_end" not in names[:1] and names.count("Head_end") == 1
+
+
+def test_every_catalogued_mistake_differs_from_the_reference():
+    for m in A2.misconceptions:
+        fn = A2.function(m.function)
+        cases = visible_cases(A2, m.function)
+        differs = [not fn.check.close(m.wrong(*c.args), fn.reference(*c.args)) for c in cases]
+        assert any(differs), m.key
+
+
+# --- fixture submissions -----------------------------------------------------------------------
+
+
+def test_reference_gets_full_marks_and_the_bonus():
+    result = check("a2", FIXTURES / "a2" / "reference.py", seed=SEED, limits=LIMITS)
+    assert result.max_score == 11 and result.score == 13 and result.bonus_score == 2
+    assert "Score: 13 / 11 (all tests, including 2 bonus points)" in str(result)
+
+
+def test_template_is_not_implemented_yet(monkeypatch):
+    monkeypatch.delenv("AUTOGRADER_SEED", raising=False)
+    result = check("a2", ASSIGNMENTS / "a2_forward_kinematics.py", limits=LIMITS)
+    assert result.score == 0 and {t.status for t in result.tests} == {"not_implemented"}
+
+
+def test_catalogue_covers_every_mutant():
+    assert_catalogue_matches_fixtures(A2, "a2")
+    assert len(A2.misconceptions) >= 8
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in (FIXTURES / "a2").glob("mutant_*.py")))
+def test_mutant_is_diagnosed_by_name(name, tmp_path):
+    fn, key = expectation("a2", name)
+    result = check("a2", fixture_submission("a2", name, tmp_path), seed=SEED, limits=LIMITS)
+    assert_diagnosed(result, fn, key)
+
+
+def test_pose_assuming_positions_first_gets_partial_bonus(tmp_path, shared_bvh_dir):
+    result = check("a2", fixture_submission("a2", "partial_pose_position_first.py", tmp_path),
+                   seed=SEED, limits=LIMITS)
+    visible = next(t for t in result.tests if t.test.name.startswith("pose_from_frame (bonus): r"))
+    rotation_first = [c for c in visible.cases if "rotation_first" in c.case.label]
+    assert rotation_first and not any(c.passed for c in rotation_first)
+    assert 0 < visible.score < 1 and result.score > result.max_score  # the core is all right
+
+
+def test_reading_the_clips_from_disk_is_refused(tmp_path):
+    result = check("a2", fixture_submission("a2", "adv_reads_the_files.py", tmp_path),
+                   limits=LIMITS)
+    parse = [t for t in result.tests if t.test.function == "parse_bvh_hierarchy"]
+    assert all(t.score == 0 for t in parse)
+    assert "does not let submissions" in str(result)
