@@ -243,10 +243,7 @@ def ccd_edges(rng):
 
 
 def ccd_hidden(rng):
-    cases = ik_cases(rng, _ccd, CCD_ITER, 8, "hidden chain")
-    P = random_chain(rng, 6)
-    return cases + [Case("hidden: out of reach", (P, P[0] + 2 * bones(P).sum() * _direction(rng),
-                                                  1e-4, CCD_ITER))]
+    return _hidden_ik_cases(rng, _ccd, CCD_ITER)
 
 
 def fabrik_random(rng):
@@ -258,10 +255,15 @@ def fabrik_edges(rng):
 
 
 def fabrik_hidden(rng):
-    cases = ik_cases(rng, _fabrik, FABRIK_ITER, 8, "hidden chain")
+    return _hidden_ik_cases(rng, _fabrik, FABRIK_ITER)
+
+
+def _hidden_ik_cases(rng, solver, max_iter):
+    """Random reachable chains plus one target twice the chain's reach away."""
+    cases = ik_cases(rng, solver, max_iter, 8, "hidden chain")
     P = random_chain(rng, 6)
-    return cases + [Case("hidden: out of reach", (P, P[0] + 2 * bones(P).sum() * _direction(rng),
-                                                  1e-4, FABRIK_ITER))]
+    far = P[0] + 2 * bones(P).sum() * _direction(rng)
+    return cases + [Case("hidden: out of reach", (P, far, 1e-4, max_iter))]
 
 
 def _two_link_case(rng, label: str, d_frac: float) -> Case:
