@@ -16,6 +16,15 @@ lab: setup
 test: setup
 	$(TEST_ENV) $(PY) -m pytest --nbval-lax --nbval-current-env --ignore=tests/e2e tests notebooks assignments
 
+# The browser test: JupyterLab in headless Chromium (Debian's package; never a downloaded build).
+e2e: setup
+	@command -v chromium >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "Installing chromium for the browser test..."; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium >/dev/null; \
+	  else echo "warning: the browser test needs chromium (apt-get install chromium)"; fi; }
+	$(TEST_ENV) $(PY) -m pytest -q tests/e2e
+
 lint: setup
 	$(VENV)/bin/ruff check .
 

@@ -1,0 +1,113 @@
+"""How fast the views answer a slider, headless: value change -> rendered frame.
+
+For each control, the time from setting a widget's value to a rendered frame (math, in-place
+mesh update, render and the PNG the notebook shows), beside the naive way: rebuilding the
+scene from scratch for the same frame. Also the math alone per event (budget: 2 ms for a
+31-joint skeleton or a 7-joint chain) and matplotlib's full redraw against blitting.
+
+    .venv/bin/python benchmarks/views.py
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+
+os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+os.environ.setdefault("PYVISTA_JUPYTER_BACKEND", "static")
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+import numpy as np  # noqa: E402
+
+
+def _median_ms(fn: Callable[[int], object], repeat: int = 15) -> float:
+    fn(0)  # warm up
+    times = []
+    for i in range(1, repeat + 1):
+        t = time.perf_counter()
+        fn(i)
+        times.append(time.perf_counter() - t)
+    return 1000.0 * float(np.median(times))
+
+
+def _row(name: str, fast: float, slow: float | None = None) -> None:
+    if slow is None:
+        print(f"  {name:<44} {fast:9.2f} ms")
+    else:
+        print(f"  {name:<44} {fast:9.2f} ms   naive {slow:9.2f} ms   x{slow / fast:6.1f}")
+
+
+def main() -> None:
+    from course import data
+    from course.skeleton import chain
+    from course.viz import controls
+    from course.viz.figures import ChainPlot
+    from course.viz.scene import SkeletonScene
+
+    motion = data.load("cmu_12_01_walk")
+    sk = motion.skeleton
+    arm = chain([1.0] * 7, axes=[0, 0, 1])
+    rng = np.random.default_rng(0)
+
+    def rebuild(parents, pose) -> None:  # the naive way: a new scene per event
+        scene = SkeletonScene(window_size=(640, 520))
+        scene.add_skeleton(parents, pose)
+        scene.screenshot()
+        scene.close()
+
+    print("math per event (budget 2 ms)")
+    local, root = motion.local_rotations[100], motion.root_positions[100]
+    _row(f"FK, {sk.n_joints} joints (CMU walk)",
+         _median_ms(lambda _i: sk.forward_kinematics(local, root), 50))
+    import course.ik
+
+    ident = np.tile([1.0, 0, 0, 0], (arm.n_joints, 1))
+    for method in ("ccd", "fabrik", "dls"):
+        _row(f"IK {method}, 7-joint chain, solve + record",
+             _median_ms(lambda i, m=method: course.ik.solve(
+                 arm, ident, np.zeros(3), {"end_effector": [3.0, 4.0 + 0.01 * i, 0.0]},
+                 method=m, record=True), 20))
+
+    print("\nvalue change -> rendered frame (static backend: render + PNG)")
+    ex = controls.fk_explorer(sk, local, root)
+    slider = ex.sliders["LeftArm.0"]
+    fast = _median_ms(lambda i: setattr(slider, "value", float(i % 90)))
+    _row("fk_explorer (38 joints, axes)", fast, _median_ms(
+        lambda _i: rebuild(sk.parents, ex.positions), 5))
+    ex.close()
+
+    player = controls.bvh_player(motion)
+    fast = _median_ms(lambda i: setattr(player.sliders["frame"], "value", 7 * i))
+    _row("bvh_player frame", fast, _median_ms(
+        lambda i: rebuild(sk.parents, player.positions[7 * i]), 5))
+    player.close()
+
+    rot = controls.rotation_explorer()
+    _row("rotation_explorer (frame + gimbal figure)",
+         _median_ms(lambda i: setattr(rot.sliders["angle0"], "value", float(i))))
+    rot.close()
+
+    pg = controls.ik_playground(arm, methods=["ccd", "fabrik", "dls"])
+    fast = _median_ms(lambda i: setattr(pg.sliders["y"], "value", 3.0 + 0.05 * i))
+    _row("ik_playground target (dls + convergence plot)", fast, _median_ms(
+        lambda _i: rebuild(arm.parents, pg.result.positions), 5))
+    replay = _median_ms(lambda i: setattr(pg.sliders["iteration"], "value", i % len(pg.frames)))
+    _row("ik_playground iteration replay", replay)
+    pg.close()
+
+    print("\nmatplotlib, 30 bones")
+    parents = np.concatenate([[-1], np.arange(30)])
+    pose = np.cumsum(rng.normal(size=(31, 3)), axis=0)
+    for dims in (2, 3):
+        plot = ChainPlot(parents, pose, dims=dims)
+        update = _median_ms(lambda i, p=plot: p.update(pose + 0.01 * i))
+        full = _median_ms(lambda i, p=plot: (p.update(pose + 0.01 * i), p.figure.canvas.draw()))
+        _row(f"{dims}D: update{' (blit)' if dims == 2 else ''} vs full redraw", update, full)
+
+
+if __name__ == "__main__":
+    main()

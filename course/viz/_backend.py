@@ -1,0 +1,126 @@
+"""Where the pictures go: an interactive trame view in JupyterLab, PNG images without a display.
+
+The choice is made for the student, never hard-coded in a notebook:
+
+- ``PYVISTA_JUPYTER_BACKEND`` wins when set (CI sets ``static`` so executed notebooks embed
+  images);
+- inside a Jupyter kernel with trame installed (``pyvista[jupyter]``): ``"trame"``, the
+  interactive view, rendered by VTK in the kernel and streamed to the browser;
+- anywhere else (scripts, tests): ``"static"`` images.
+
+On a remote JupyterHub the trame iframe reaches the kernel's trame server through
+``jupyter-server-proxy`` (installed with ``pyvista[jupyter]``); set
+``pyvista.global_theme.trame.server_proxy_enabled = True`` (and, if the hub uses a custom
+prefix, ``server_proxy_prefix``) before the first view, or export
+``PYVISTA_TRAME_SERVER_PROXY_PREFIX``.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import sys
+import threading
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+
+
+def _headless() -> bool:
+    """True on Linux without an X11/Wayland display (CI containers, remote kernels)."""
+    return sys.platform.startswith("linux") and not (
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    )
+
+
+def _cache_dir() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "course-kinematics"
+
+
+def configure_environment() -> None:
+    """Set the environment before VTK/trame read it; every setting yields to the user's own.
+
+    - ``VTK_WASM_DIR_OVERRIDE``: trame-vtklocal otherwise downloads a WebAssembly bundle from
+      the internet at every server start; pointing it at an existing directory keeps a
+      classroom without internet quiet (the default trame view renders in the kernel and
+      does not need the bundle).
+    - Without a display: off-screen rendering through EGL, so views and screenshots work in
+      CI and on remote kernels.
+    """
+    wasm_dir = _cache_dir() / "vtk-wasm"
+    try:
+        wasm_dir.mkdir(parents=True, exist_ok=True)
+        os.environ.setdefault("VTK_WASM_DIR_OVERRIDE", str(wasm_dir))
+    except OSError:  # read-only home: trame then falls back to its own cache
+        pass
+    if _headless():
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+        os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+
+
+def in_jupyter_kernel() -> bool:
+    """True when running inside an IPython kernel (JupyterLab, nbval, nbclient)."""
+    ipython = sys.modules.get("IPython")
+    if ipython is None:
+        return False
+    shell = ipython.get_ipython()
+    return shell is not None and "IPKernelApp" in getattr(shell, "config", {})
+
+
+def jupyter_backend() -> str:
+    """``"trame"`` (interactive) or ``"static"`` (PNG), chosen as described in the module doc."""
+    env = os.environ.get("PYVISTA_JUPYTER_BACKEND", "").strip().lower()
+    if env:
+        return "static" if env in ("static", "none") else env
+    if not in_jupyter_kernel():
+        return "static"
+    try:
+        import trame_pyvista  # noqa: F401
+    except ImportError:
+        return "static"
+    return "trame"
+
+
+def off_screen() -> bool:
+    """Render without a window: in a kernel (trame renders in the kernel too) or headless."""
+    flag = os.environ.get("PYVISTA_OFF_SCREEN", "").strip().lower() in ("1", "true", "yes")
+    return flag or in_jupyter_kernel() or _headless()
+
+
+T = TypeVar("T")
+_gl_thread: ThreadPoolExecutor | None = None
+_gl_lock = threading.Lock()
+
+
+def on_gl_thread(fn: Callable[..., T], *args: Any) -> T:
+    """Run ``fn(*args)`` on the one thread that owns VTK's OpenGL contexts, and wait for it.
+
+    In JupyterLab 4.6 with ipykernel 7, widget events arrive on a *subshell* thread while cells
+    run on the main thread; an OpenGL (EGL) context is bound to one thread, and rendering from
+    another crashes the kernel. So, inside a kernel, every render goes through one worker
+    thread; elsewhere (scripts, tests) ``fn`` runs directly.
+    """
+    global _gl_thread
+    if not in_jupyter_kernel():
+        return fn(*args)
+    with _gl_lock:
+        if _gl_thread is None:
+            _gl_thread = ThreadPoolExecutor(1, thread_name_prefix="course-viz-gl")
+    if threading.current_thread().name.startswith("course-viz-gl"):
+        return fn(*args)
+    return _gl_thread.submit(fn, *args).result()
+
+
+def png_bytes(image: np.ndarray, compress_level: int = 1) -> bytes:
+    """Encode an ``(H, W, 3|4)`` uint8 image as PNG (fast compression: this runs per event)."""
+    from PIL import Image
+
+    buffer = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(image)).save(
+        buffer, format="PNG", compress_level=compress_level
+    )
+    return buffer.getvalue()

@@ -1,0 +1,651 @@
+"""Interactive controls (ipywidgets): drag a slider, the skeleton, the numbers and the plot answer.
+
+Every control is an object that displays itself in a notebook and also works from code:
+``.sliders`` (name -> widget), ``.readout`` (an HTML widget with the numbers), ``.scene``
+(the 3D view; e.g. ``.scene.joint_positions``) and ``.widget`` (the whole layout). Setting a
+slider's ``.value`` from code runs the same update as dragging it, so tests and notebooks can
+drive them. Per event the math (FK, IK) runs once on small arrays and the views are updated in
+place; animation (``widgets.Play``) runs in the browser, so no cell ever blocks.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import ipywidgets as widgets
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .figures import GimbalFigure, convergence_plot, figure_png, slerp_arc_figure
+from .scene import FrameScene, SkeletonScene
+
+Array = NDArray[np.float64]
+
+def _slider_style(readout_format: str = ".0f") -> dict[str, Any]:
+    """Common slider options (a fresh Layout each time: widgets must not share one)."""
+    return {"continuous_update": True, "readout_format": readout_format,
+            "style": {"description_width": "80px"}, "layout": widgets.Layout(width="340px")}
+
+
+def _angle_slider(description: str, value: float = 0.0, limit: float = 180.0
+                  ) -> widgets.FloatSlider:
+    """A slider in degrees (what students read); the math converts to radians."""
+    return widgets.FloatSlider(value=value, min=-limit, max=limit, step=1.0,
+                               description=description, **_slider_style())
+
+
+def _matrix_html(R: Array) -> str:
+    rows = "".join(
+        "<tr>" + "".join(f"<td style='padding:0 8px;text-align:right'>{v:+.3f}</td>" for v in r)
+        + "</tr>" for r in R
+    )
+    return f"<table style='font-family:monospace'>{rows}</table>"
+
+
+def _vec(v: ArrayLike, fmt: str = "+.3f") -> str:
+    return "(" + ", ".join(format(float(x), fmt) for x in np.ravel(v)) + ")"
+
+
+class Control:
+    """Common shape of every control: a layout, its sliders, a readout and a scene."""
+
+    widget: widgets.Widget
+    sliders: dict[str, widgets.Widget]
+    readout: widgets.HTML
+
+    def _ipython_display_(self) -> None:
+        from IPython.display import display
+
+        display(self.widget)
+
+    @classmethod
+    def _widgets(cls, w: widgets.Widget) -> list[widgets.Widget]:
+        return [w, *(x for c in getattr(w, "children", ()) for x in cls._widgets(c))]
+
+    def close(self) -> None:
+        """Close the widgets and free the render window."""
+        for w in self._widgets(self.widget):
+            w.close()
+        scene = getattr(self, "scene", None)
+        if scene is not None:
+            scene.close()
+
+
+# -- rotations ---------------------------------------------------------------------------------
+
+
+class RotationExplorer(Control):
+    """Three Euler angle sliders and an order: the matrix, quaternion and axis-angle live, the
+    rotated frame in 3D, the gimbal rings, and a warning near gimbal lock."""
+
+    LOCK_WARNING_DEG = 2.0
+
+    def __init__(self, order: str = "XYZ", angles: ArrayLike = (0.0, 0.0, 0.0),
+                 degrees: bool = False) -> None:
+        from course.rotations import EULER_ORDERS
+
+        if order not in EULER_ORDERS:
+            raise ValueError(f"order must be one of the 24 Euler orders, got {order!r}")
+        a = np.asarray(angles, dtype=np.float64).reshape(3)
+        a_deg = a if degrees else np.degrees(a)
+        self.order = widgets.Dropdown(options=list(EULER_ORDERS), value=order,
+                                      description="order", layout=widgets.Layout(width="200px"))
+        self.sliders = {f"angle{k}": _angle_slider(f"angle {k + 1}", v)
+                        for k, v in enumerate(a_deg)}
+        self.readout = widgets.HTML()
+        self.warning = widgets.HTML()
+        self.scene = FrameScene(1, window_size=(380, 340))
+        self.gimbal = GimbalFigure(order, np.radians(a_deg))
+        self.gimbal_image = widgets.Image(format="png", width=340)
+        controls = widgets.VBox([self.order, *self.sliders.values(), self.warning, self.readout])
+        self.widget = widgets.HBox([controls, self.scene.widget(), self.gimbal_image])
+        for w in (self.order, *self.sliders.values()):
+            w.observe(self._changed, names="value")
+        self._changed()
+
+    @property
+    def angles(self) -> Array:
+        """The three angles in radians, in the order's sequence."""
+        return np.radians([s.value for s in self.sliders.values()])
+
+    def _changed(self, _change: Any = None) -> None:
+        from course.rotations import (
+            axis_angle_from_quat,
+            gimbal_lock_distance,
+            matrix_from_euler,
+            quat_from_euler,
+        )
+
+        order, a = self.order.value, self.angles
+        for k, s in enumerate(self.sliders.values()):
+            s.description = f"{order[k]} (#{k + 1})"
+        self.matrix = matrix_from_euler(a, order)
+        self.quaternion = quat_from_euler(a, order)
+        axis, angle = axis_angle_from_quat(self.quaternion)
+        distance = float(np.degrees(gimbal_lock_distance(a, order)))
+        self.gimbal_lock = distance < self.LOCK_WARNING_DEG
+        kind = "intrinsic: R = " if order.isupper() else "extrinsic: R = "
+        product = " ".join(f"R<sub>{c}</sub>" for c in (order if order.isupper() else order[::-1]))
+        self.readout.value = (
+            f"<b>{kind}{product}</b>{_matrix_html(self.matrix)}"
+            f"<b>q</b> = (w, x, y, z) = {_vec(self.quaternion)}<br>"
+            f"<b>axis</b> = {_vec(axis)}, <b>angle</b> = {np.degrees(angle):.1f}&deg;"
+        )
+        self.warning.value = (
+            "<div style='background:#fde8e8;color:#a4161a;padding:4px 8px;border-radius:4px'>"
+            f"&#9888; <b>Gimbal lock</b>: the middle angle is {distance:.1f}&deg; from lock; "
+            f"the {order[0]} and {order[2]} rings are aligned and one degree of freedom is "
+            "lost.</div>" if self.gimbal_lock else ""
+        )
+        self.scene.set_rotations(self.matrix[None])
+        self.gimbal.update(a, order)
+        self.gimbal_image.value = self.gimbal.png()
+
+
+def rotation_explorer(order: str = "XYZ", angles: ArrayLike = (0.0, 0.0, 0.0),
+                      degrees: bool = False) -> RotationExplorer:
+    """Explore Euler angles: see :class:`RotationExplorer`."""
+    return RotationExplorer(order, angles, degrees)
+
+
+class SlerpExplorer(Control):
+    """Two rotations (Euler "XYZ" sliders) and t: LERP, NLERP and SLERP side by side.
+
+    LERP's quaternion ``(1-t) q0 + t q1`` is not unit; its frame is drawn as the map
+    ``v -> q v q*``, which scales by ``|q|^2`` (the frame shrinks mid-way). NLERP normalises
+    (right rotation, uneven speed); SLERP moves at constant angular speed.
+    """
+
+    def __init__(self, start: ArrayLike = (0.0, 0.0, 0.0), end: ArrayLike = (20.0, 150.0, 60.0),
+                 t: float = 0.5) -> None:
+        self.sliders = {
+            **{f"start{k}": _angle_slider(f"start {c}", v) for k, (c, v) in
+               enumerate(zip("XYZ", np.ravel(start), strict=True))},
+            **{f"end{k}": _angle_slider(f"end {c}", v) for k, (c, v) in
+               enumerate(zip("XYZ", np.ravel(end), strict=True))},
+            "t": widgets.FloatSlider(value=t, min=0.0, max=1.0, step=0.01, description="t",
+                                     **_slider_style(".2f")),
+        }
+        self.readout = widgets.HTML()
+        self.scene = FrameScene(3, labels=["LERP", "NLERP", "SLERP"], window_size=(780, 330))
+        self.arc_image = widgets.Image(format="png", width=330)
+        left = widgets.VBox([*self.sliders.values(), self.readout])
+        self.widget = widgets.VBox([self.scene.widget(), widgets.HBox([left, self.arc_image])])
+        for name, s in self.sliders.items():
+            s.observe(self._changed_t if name == "t" else self._changed_ends, names="value")
+        self._changed_ends()
+
+    def _changed_ends(self, _change: Any = None) -> None:
+        from course.rotations import quat_from_euler
+
+        ang = np.radians([s.value for s in self.sliders.values()][:6]).reshape(2, 3)
+        self.q0, self.q1 = quat_from_euler(ang, "XYZ")
+        self.arc_image.value = figure_png(slerp_arc_figure(self.q0, self.q1))
+        self._changed_t()
+
+    def _changed_t(self, _change: Any = None) -> None:
+        from course.rotations import lerp, matrix_from_quat, nlerp, quat_angle, slerp
+
+        t = self.sliders["t"].value
+        q1 = self.q1 if np.dot(self.q0, self.q1) >= 0 else -self.q1  # same hemisphere as q0
+        q = {"LERP": lerp(self.q0, q1, t), "NLERP": nlerp(self.q0, q1, t),
+             "SLERP": slerp(self.q0, q1, t)}
+        self.quaternions = q
+        norms = {k: float(np.linalg.norm(v)) for k, v in q.items()}
+        # v -> q v q* = |q|^2 R(q/|q|) v
+        self.scene.set_rotations(
+            [norms[k] ** 2 * matrix_from_quat(v / norms[k]) for k, v in q.items()]
+        )
+        total = float(np.degrees(quat_angle(self.q0, q1)))
+        rows = "".join(
+            f"<tr><td><b>{k}</b></td><td>{_vec(v)}</td><td>{norms[k]:.3f}</td>"
+            f"<td>{np.degrees(quat_angle(self.q0, v / norms[k])):.1f}&deg;</td></tr>"
+            for k, v in q.items()
+        )
+        self.readout.value = (
+            "<table style='font-family:monospace'><tr><th></th><th>q(t)</th><th>|q|</th>"
+            f"<th>angle from q0</th></tr>{rows}</table>"
+            f"t &middot; total angle = {t * total:.1f}&deg; (SLERP matches it)"
+        )
+
+
+def slerp_explorer(start: ArrayLike = (0.0, 0.0, 0.0), end: ArrayLike = (20.0, 150.0, 60.0),
+                   t: float = 0.5) -> SlerpExplorer:
+    """Compare LERP / NLERP / SLERP: see :class:`SlerpExplorer` (angles in degrees)."""
+    return SlerpExplorer(start, end, t)
+
+
+# -- forward kinematics --------------------------------------------------------------------------
+
+
+def _dof_axes(skeleton: Any, j: int) -> Array:
+    """The rotation axes of joint j's sliders, ``(dof, 3)``, composed in order (intrinsic):
+    a hinge has its axis, a universal joint its two axes, a ball joint z, y, x (BVH's
+    ``Zrotation Yrotation Xrotation``); End Sites none."""
+    types = getattr(skeleton, "joint_types", None)
+    jt = types[j] if types is not None else None
+    if jt is not None and getattr(jt, "dof", 3) == 0:
+        return np.zeros((0, 3))
+    if jt is not None and getattr(jt, "axis", None) is not None:
+        return np.asarray(jt.axis, dtype=np.float64).reshape(1, 3)
+    if jt is not None and getattr(jt, "axes", None) is not None:
+        return np.asarray(jt.axes, dtype=np.float64).reshape(-1, 3)
+    if skeleton.names[j].endswith("_end") and not skeleton.children(j):
+        return np.zeros((0, 3))
+    return np.eye(3)[[2, 1, 0]]
+
+
+class FKExplorer(Control):
+    """One slider per degree of freedom, grouped by joint, on top of a base pose:
+    ``R_j = R_j^0 R(a_1, th_1) R(a_2, th_2) ...``, then ``Q_j = Q_parent R_j``,
+    ``p_j = p_parent + Q_parent l_j``. A reset returns to the base pose."""
+
+    def __init__(self, skeleton: Any, local_rotations: ArrayLike | None = None,
+                 root_position: ArrayLike | None = None, *, axes: bool = True,
+                 limit: float = 180.0) -> None:
+        from course.rotations import quat_identity
+
+        self.skeleton = skeleton
+        n = skeleton.n_joints
+        self.base = (np.tile(quat_identity(), (n, 1)) if local_rotations is None
+                     else np.array(local_rotations, dtype=np.float64).reshape(n, 4))
+        self.root_position = (np.zeros(3) if root_position is None
+                              else np.asarray(root_position, dtype=np.float64).reshape(3))
+        self.local_rotations = self.base.copy()
+        self._quiet = False
+        self.axes = {j: _dof_axes(skeleton, j) for j in range(n)}
+        self.sliders: dict[str, widgets.FloatSlider] = {}
+        groups, titles = [], []
+        for j, ax in self.axes.items():
+            if len(ax) == 0:
+                continue
+            row = []
+            for k, a in enumerate(ax):
+                label = "xyz"[int(np.argmax(np.abs(a)))] if np.count_nonzero(a) == 1 else f"a{k}"
+                s = _angle_slider(label, 0.0, limit)
+                s.observe(lambda _c, j=j: self._changed(j), names="value")
+                self.sliders[f"{skeleton.names[j]}.{k}"] = s
+                row.append(s)
+            groups.append(widgets.VBox(row))
+            titles.append(skeleton.names[j])
+        self.accordion = widgets.Accordion(children=groups, titles=tuple(titles),
+                                           selected_index=0 if groups else None)
+        self.reset_button = widgets.Button(description="reset", icon="undo")
+        self.reset_button.on_click(lambda _b: self.reset())
+        self.readout = widgets.HTML()
+        self.positions, self.orientations = skeleton.forward_kinematics(
+            self.local_rotations, self.root_position)
+        # frame the whole reach (the pose can turn anywhere), not just this pose
+        reach = float(np.linalg.norm(self.positions - self.positions[0], axis=1).max())
+        corners = self.positions[0] + reach * np.array([[1, 1, 1], [-1, -1, -1]])
+        self.scene = SkeletonScene(window_size=(640, 520))
+        self.scene.add_skeleton(skeleton.parents, self.positions, self.orientations,
+                                name="pose", axes=axes,
+                                frame_points=np.concatenate([self.positions, corners]))
+        left = widgets.VBox([self.reset_button, self.accordion, self.readout],
+                            layout=widgets.Layout(width="400px", max_height="540px",
+                                                  overflow="auto"))
+        self.widget = widgets.HBox([left, self.scene.widget()])
+        self._joint = next(iter(j for j, a in self.axes.items() if len(a)), 0)
+        self._show_readout()
+
+    def _delta(self, j: int) -> Array:
+        from course.rotations import quat_from_axis_angle, quat_identity, quat_mul
+
+        q = quat_identity()
+        name = self.skeleton.names[j]
+        for k, a in enumerate(self.axes[j]):
+            theta = np.radians(self.sliders[f"{name}.{k}"].value)
+            q = quat_mul(q, quat_from_axis_angle(a, theta))
+        return q
+
+    def _changed(self, j: int) -> None:
+        from course.rotations import quat_mul
+
+        if self._quiet:
+            return
+        self.local_rotations[j] = quat_mul(self.base[j], self._delta(j))
+        self._joint = j
+        self.update()
+
+    def update(self) -> None:
+        """FK for the current sliders, then move the scene in place."""
+        self.positions, self.orientations = self.skeleton.forward_kinematics(
+            self.local_rotations, self.root_position)
+        self.scene.set_pose(self.positions, self.orientations)
+        self._show_readout()
+
+    def _show_readout(self) -> None:
+        j = self._joint
+        name = self.skeleton.names[j]
+        self.readout.value = (
+            f"<b>{name}</b>: R<sub>j</sub> = {_vec(self.local_rotations[j])}<br>"
+            f"Q<sub>j</sub> = {_vec(self.orientations[j])}<br>"
+            f"p<sub>j</sub> = {_vec(self.positions[j], '+.2f')}"
+        )
+
+    def reset(self) -> None:
+        """All sliders back to 0: the base pose (one FK and one render, not one per slider)."""
+        self._quiet = True
+        try:
+            for s in self.sliders.values():
+                s.value = 0.0
+        finally:
+            self._quiet = False
+        self.local_rotations = self.base.copy()
+        self.update()
+
+
+def fk_explorer(skeleton: Any, local_rotations: ArrayLike | None = None,
+                root_position: ArrayLike | None = None, *, axes: bool = True) -> FKExplorer:
+    """Pose a skeleton joint by joint: see :class:`FKExplorer`."""
+    return FKExplorer(skeleton, local_rotations, root_position, axes=axes)
+
+
+# -- motion ------------------------------------------------------------------------------------
+
+
+class BVHPlayer(Control):
+    """Play a clip: play/pause (``widgets.Play``, runs in the browser), frame slider, speed,
+    loop, camera. FK runs once for the whole clip; a frame change is a point update."""
+
+    def __init__(self, motion: Any, *, camera: str = "follow", display_fps: float = 30.0) -> None:
+        self.motion = motion
+        self.positions, self.orientations = motion.forward_kinematics()
+        n = self.positions.shape[0]
+        fps = 1.0 / motion.frame_time
+        self.play = widgets.Play(value=0, min=0, max=n - 1, step=1, repeat=True,
+                                 description="play")
+        self.sliders = {
+            "frame": widgets.IntSlider(value=0, min=0, max=n - 1, description="frame",
+                                       **_slider_style("d")),
+            "speed": widgets.Dropdown(options=[0.25, 0.5, 1.0, 2.0], value=1.0,
+                                      description="speed", layout=widgets.Layout(width="160px")),
+            "loop": widgets.Checkbox(value=True, description="loop"),
+            "camera": widgets.Dropdown(options=["follow", "iso", "front", "side", "top"],
+                                       value=camera, description="camera",
+                                       layout=widgets.Layout(width="200px")),
+        }
+        widgets.jslink((self.play, "value"), (self.sliders["frame"], "value"))
+        widgets.link((self.sliders["loop"], "value"), (self.play, "repeat"))
+        self._fps, self._display_fps = fps, display_fps
+        self.readout = widgets.HTML()
+        self.scene = SkeletonScene(window_size=(720, 480), camera="iso")
+        self.scene.add_skeleton(motion.skeleton.parents, self.positions[0], name=motion.name
+                                or "motion", frame_points=self.positions)
+        self.scene.set_camera(camera)
+        self.sliders["frame"].observe(lambda c: self.show_frame(c["new"]), names="value")
+        self.sliders["speed"].observe(lambda _c: self._set_speed(), names="value")
+        self.sliders["camera"].observe(lambda c: self.scene.set_camera(c["new"], render=True),
+                                       names="value")
+        self._set_speed()
+        row = widgets.HBox([self.play, self.sliders["frame"], self.sliders["speed"],
+                            self.sliders["loop"], self.sliders["camera"]])
+        self.widget = widgets.VBox([self.scene.widget(), row, self.readout])
+        self.show_frame(0)
+
+    def _set_speed(self) -> None:
+        """Frames skipped so that the browser asks for about ``display_fps`` frames a second."""
+        rate = self._fps * self.sliders["speed"].value
+        self.play.step = max(1, int(round(rate / self._display_fps)))
+        self.play.interval = max(1, int(round(1000.0 * self.play.step / rate)))
+
+    def show_frame(self, frame: int) -> None:
+        frame = int(frame)
+        self.scene.set_pose(self.positions[frame])
+        self.readout.value = (f"frame {frame} / {self.positions.shape[0] - 1}, "
+                              f"t = {frame * self.motion.frame_time:.3f} s")
+
+
+def bvh_player(motion: Any, *, camera: str = "follow") -> BVHPlayer:
+    """Play a :class:`course.motion.Motion`: see :class:`BVHPlayer`."""
+    return BVHPlayer(motion, camera=camera)
+
+
+# -- inverse kinematics ------------------------------------------------------------------------
+
+
+IK_METHODS = ("ccd", "fabrik", "jacobian_transpose", "pseudo_inverse", "dls")
+
+
+def _ik_methods() -> tuple[str, ...]:
+    """The methods course.ik.solve offers (its METHODS when it lists them)."""
+    import course.ik
+
+    return tuple(getattr(course.ik, "METHODS", IK_METHODS))
+
+
+class IKPlayground(Control):
+    """Drag a target, pick a method, and watch IK solve it; an iteration slider replays the
+    recorded solve, and the residual and iteration count update live.
+
+    The solve runs once per event with ``record=True``; replaying iterations only moves points.
+    """
+
+    def __init__(self, skeleton: Any, methods: Sequence[str] | None = None, *,
+                 end_effector: int | str | None = None, target: ArrayLike | None = None,
+                 local_rotations: ArrayLike | None = None, root_position: ArrayLike | None = None,
+                 tol: float = 1e-4, max_iter: int = 100) -> None:
+        from course.rotations import quat_identity
+
+        methods = tuple(methods or _ik_methods())
+        self.skeleton = skeleton
+        n = skeleton.n_joints
+        self.effector = (n - 1 if end_effector is None else
+                         skeleton.index(end_effector) if isinstance(end_effector, str)
+                         else int(end_effector))
+        self.start = (np.tile(quat_identity(), (n, 1)) if local_rotations is None
+                      else np.array(local_rotations, dtype=np.float64).reshape(n, 4))
+        self.root_position = (np.zeros(3) if root_position is None
+                              else np.asarray(root_position, dtype=np.float64).reshape(3))
+        start_pos, _ = skeleton.forward_kinematics(self.start, self.root_position)
+        reach = float(np.linalg.norm(skeleton.offsets[1:], axis=1).sum())
+        goal = (start_pos[self.effector] + np.array([-0.3, 0.4, 0.0]) * reach * 0.5
+                if target is None else np.asarray(target, dtype=np.float64).reshape(3))
+        center = start_pos[0]
+        self.sliders = {
+            **{c: widgets.FloatSlider(value=goal[k], min=center[k] - reach, max=center[k] + reach,
+                                      step=reach / 200, description=f"target {c}",
+                                      **_slider_style(".2f"))
+               for k, c in enumerate("xyz")},
+            "method": widgets.Dropdown(options=list(methods),
+                                       value="dls" if "dls" in methods else methods[0],
+                                       description="method", layout=widgets.Layout(width="260px")),
+            "tol": widgets.FloatLogSlider(value=tol, base=10, min=-8, max=-1, step=0.5,
+                                          description="tolerance",
+                                          **_slider_style(".0e")),
+            "max_iter": widgets.IntSlider(value=max_iter, min=1, max=500, description="max iter",
+                                          **_slider_style("d")),
+            "iteration": widgets.IntSlider(value=0, min=0, max=0, description="iteration",
+                                           **_slider_style("d")),
+        }
+        self.readout = widgets.HTML()
+        self.scene = SkeletonScene(window_size=(640, 500))
+        frame = np.concatenate([start_pos, center + reach * np.array([[1, 1, 1], [-1, -1, -1]])])
+        self.scene.add_skeleton(skeleton.parents, start_pos, name="start", color=(
+            "#c3cad3", "#9aa5b1"), opacity=0.55, frame_points=frame[None])
+        self.scene.add_skeleton(skeleton.parents, start_pos, name="solution")
+        self.scene.add_trail(capacity=512)
+        self.convergence_image = widgets.Image(format="png", width=420)
+        self._convergence: Any = None
+        self._solving = False
+        for name in ("x", "y", "z", "method", "tol", "max_iter"):
+            self.sliders[name].observe(lambda _c: self.solve(), names="value")
+        self.sliders["iteration"].observe(lambda c: self.show_iteration(c["new"]), names="value")
+        left = widgets.VBox([*self.sliders.values(), self.readout, self.convergence_image])
+        self.widget = widgets.HBox([left, self.scene.widget()])
+        self.solve()
+
+    @property
+    def target(self) -> Array:
+        return np.array([self.sliders[c].value for c in "xyz"])
+
+    def solve(self) -> None:
+        """Solve IK from the start pose to the current target, recording every iterate."""
+        import course.ik
+
+        name = self.skeleton.names[self.effector]
+        try:
+            self.result = course.ik.solve(
+                self.skeleton, self.start, self.root_position, {name: self.target},
+                method=self.sliders["method"].value, tol=self.sliders["tol"].value,
+                max_iter=self.sliders["max_iter"].value, record=True,
+            )
+        except ValueError as err:  # e.g. two_link on a longer chain: say why, keep the view
+            self.readout.value = f"<span style='color:#a4161a'>{err}</span>"
+            return
+        self.frames = np.array([f["positions"] for f in self.result.frames], dtype=np.float64)
+        self.scene.set_targets(self.target[None], render=False)
+        it = self.sliders["iteration"]
+        last = len(self.frames) - 1
+        self._solving = True  # one render per event: not one more from the slider's observer
+        try:
+            it.max = max(last, 0)
+            it.value = it.max
+        finally:
+            self._solving = False
+        self.scene.set_trail(self.frames[:, self.effector])
+        self._plot_convergence()
+        self.show_iteration(it.value)
+
+    def _plot_convergence(self) -> None:
+        """Update the residual curve's data (the figure is made once)."""
+        residuals = np.maximum(np.asarray(self.result.residuals, dtype=np.float64),
+                               np.finfo(float).eps)
+        if self._convergence is None:
+            self._convergence = convergence_plot({"residual": residuals},
+                                                 tol=self.sliders["tol"].value)
+        ax = self._convergence
+        curve, tol_line = ax.get_lines()[:2]
+        curve.set_data(np.arange(residuals.size), residuals)
+        curve.set_label(f"{self.sliders['method'].value} ({residuals.size - 1})")
+        tol_line.set_ydata([self.sliders["tol"].value] * 2)
+        ax.relim()
+        ax.autoscale_view()
+        ax.legend(frameon=False, fontsize="small")
+        ax.figure.canvas.draw()
+        self.convergence_image.value = figure_png(ax.figure)
+
+    def show_iteration(self, k: int) -> None:
+        """Show the k-th recorded pose of the last solve."""
+        if self._solving:
+            return
+        k = int(np.clip(k, 0, len(self.frames) - 1))
+        pose = self.frames[k] if len(self.frames) else self.result.positions
+        self.scene.set_pose(pose, name="solution")
+        r = self.result
+        residual = np.asarray(r.residuals, dtype=np.float64)
+        state = "converged" if r.converged else f"not converged ({r.reason})"
+        self.readout.value = (
+            f"<b>{self.sliders['method'].value}</b>: {state} in "
+            f"<b>{r.iterations}</b> iterations<br>residual at iteration {k}: "
+            f"<b>{residual[min(k, residual.size - 1)]:.2e}</b> "
+            f"(final {residual[-1]:.2e})"
+        )
+
+
+def ik_playground(skeleton: Any, methods: Sequence[str] | None = None, **kwargs: Any
+                  ) -> IKPlayground:
+    """Play with IK on a chain or skeleton: see :class:`IKPlayground`."""
+    return IKPlayground(skeleton, methods, **kwargs)
+
+
+class FullBodyIK(Control):
+    """IK on one frame of a clip: choose the root joint (the one that stays put), the end
+    effectors and their targets; the captured pose (grey) stays beside the solution."""
+
+    def __init__(self, motion: Any, frame: int = 0, *, root: str | None = None,
+                 effectors: Sequence[str] | None = None, method: str | None = None) -> None:
+        sk = motion.skeleton
+        self.skeleton = sk
+        self.local = np.array(motion.local_rotations[frame])
+        self.root_position = np.array(motion.root_positions[frame])
+        self.positions, _ = sk.forward_kinematics(self.local, self.root_position)
+        names = list(sk.names)
+        leaves = [n for j, n in enumerate(names) if not sk.children(j)]
+        effectors = list(effectors or [n for n in leaves if "Hand" in n or "Foot" in n][:2]
+                         or leaves[:1])
+        self.targets = {e: self.positions[sk.index(e)].copy() for e in names}
+        height = float(np.ptp(self.positions[:, 1]))
+        methods = _ik_methods()
+        self.sliders = {
+            "root": widgets.Dropdown(options=names, value=root or names[0], description="root"),
+            "effectors": widgets.SelectMultiple(options=leaves, value=tuple(effectors),
+                                                description="effectors", rows=6),
+            "edit": widgets.Dropdown(options=list(effectors), description="edit target"),
+            "method": widgets.Dropdown(options=list(methods),
+                                       value=method or ("dls" if "dls" in methods else methods[0]),
+                                       description="method"),
+            **{c: widgets.FloatSlider(min=-height, max=height, step=height / 200,
+                                      description=f"target {c}",
+                                      **_slider_style(".1f")) for c in "xyz"},
+        }
+        self.readout = widgets.HTML()
+        self.scene = SkeletonScene(window_size=(640, 520))
+        self.scene.add_skeleton(sk.parents, self.positions, name="captured",
+                                color=("#c3cad3", "#9aa5b1"), opacity=0.6)
+        self.scene.add_skeleton(sk.parents, self.positions, name="IK")
+        self._editing = False
+        self.sliders["effectors"].observe(lambda _c: self._effectors_changed(), names="value")
+        self.sliders["edit"].observe(lambda _c: self._load_target(), names="value")
+        for k in ("root", "method"):
+            self.sliders[k].observe(lambda _c: self.solve(), names="value")
+        for c in "xyz":
+            self.sliders[c].observe(lambda _c: self._target_moved(), names="value")
+        self.widget = widgets.HBox([widgets.VBox([*self.sliders.values(), self.readout]),
+                                    self.scene.widget()])
+        self._load_target()
+
+    def _effectors_changed(self) -> None:
+        chosen = list(self.sliders["effectors"].value)
+        self.sliders["edit"].options = chosen
+        self._load_target()
+
+    def _load_target(self) -> None:
+        """Put the edited effector's target into the x/y/z sliders (relative to the
+        captured root), then solve once."""
+        name = self.sliders["edit"].value
+        self._editing = True
+        if name is not None:
+            rel = self.targets[name] - self.root_position
+            for k, c in enumerate("xyz"):
+                self.sliders[c].value = float(rel[k])
+        self._editing = False
+        self.solve()
+
+    def _target_moved(self) -> None:
+        name = self.sliders["edit"].value
+        if self._editing or name is None:
+            return
+        self.targets[name] = self.root_position + np.array([self.sliders[c].value for c in "xyz"])
+        self.solve()
+
+    def solve(self) -> None:
+        import course.ik
+
+        chosen = list(self.sliders["effectors"].value)
+        targets = {e: self.targets[e] for e in chosen}
+        try:
+            self.result = course.ik.solve(
+                self.skeleton, self.local, self.root_position, targets,
+                method=self.sliders["method"].value, root=self.sliders["root"].value,
+            )
+        except ValueError as err:  # e.g. an effector on the root's side: say why
+            self.readout.value = f"<span style='color:#a4161a'>{err}</span>"
+            return
+        self.scene.set_targets(np.array(list(targets.values())) if targets
+                               else np.empty((0, 3)), render=False)
+        self.scene.set_pose(self.result.positions, name="IK")
+        r = self.result
+        residual = np.asarray(r.residuals, dtype=np.float64)
+        self.readout.value = (
+            f"root <b>{self.sliders['root'].value}</b>, {len(chosen)} effector(s): "
+            f"{'converged' if r.converged else f'not converged ({r.reason})'}, "
+            f"{r.iterations} iterations, residual {residual[-1]:.2e}"
+        )
+
+
+def full_body_ik(motion: Any, frame: int = 0, **kwargs: Any) -> FullBodyIK:
+    """Full-body IK on a frame of a clip: see :class:`FullBodyIK`."""
+    return FullBodyIK(motion, frame, **kwargs)

@@ -1,0 +1,652 @@
+"""3D skeleton views (pyvista), updated in place.
+
+A :class:`SkeletonScene` holds one or more skeletons, each drawn from a few VTK meshes whose
+point arrays are overwritten on every change: a point set glyphed with spheres on the GPU
+(joints), a line set run through a tube filter (bones), a line set of axis triads, target
+markers and an end-effector trail. A slider event therefore costs a copy of ``(J, 3)`` floats
+and one render; nothing is rebuilt.
+
+The core takes plain arrays (``parents``, ``positions (J, 3)``, optional ``orientations
+(J, 4)``), so it draws anything: a hand-made chain, a :class:`course.skeleton.Skeleton` pose,
+a BVH frame. y is up.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._backend import (
+    _headless,
+    configure_environment,
+    jupyter_backend,
+    off_screen,
+    on_gl_thread,
+    png_bytes,
+)
+
+configure_environment()
+
+import pyvista as pv  # noqa: E402  (after the environment is set: VTK reads it on import)
+from vtkmodules.vtkFiltersCore import vtkTubeFilter  # noqa: E402
+from vtkmodules.vtkRenderingCore import vtkGlyph3DMapper, vtkPolyDataMapper  # noqa: E402
+
+Array = NDArray[np.float64]
+
+#: (bone colour, joint colour) per skeleton, in the order skeletons are added.
+PALETTE: tuple[tuple[str, str], ...] = (
+    ("#3d7dca", "#ffb000"),  # blue bones, amber joints: the student's / main skeleton
+    ("#8f9aa6", "#4a5561"),  # greys: the reference / before
+    ("#2bb673", "#e5484d"),  # green bones, red joints: after IK
+    ("#8e6bd8", "#f08c3a"),
+)
+TARGET_COLOR = "#e5484d"
+TRAIL_COLOR = "#d1347a"
+AXIS_COLORS = np.array([[230, 57, 70], [42, 170, 82], [44, 110, 230]], dtype=np.uint8)
+BACKGROUND = ("#f4f6fa", "#c9d3e3")  # bottom, top: a soft sky
+FLOOR_COLORS = ("#e9ecef", "#d5dae0")
+CAMERA_PRESETS = ("iso", "front", "side", "top", "follow")
+
+
+def _as_positions(positions: ArrayLike, n_joints: int, name: str = "positions") -> Array:
+    p = np.asarray(positions, dtype=np.float64)
+    if p.shape != (n_joints, 3):
+        raise ValueError(f"{name} must have shape ({n_joints}, 3), got {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    return p
+
+
+def _as_parents(parents: ArrayLike) -> NDArray[np.intp]:
+    par = np.asarray(parents, dtype=np.intp).reshape(-1)
+    later = np.arange(1, par.size)
+    if par.size == 0 or par[0] != -1 or np.any(par[1:] < 0) or np.any(par[1:] >= later):
+        raise ValueError(
+            "parents must list joints parent-before-child with parents[0] == -1 "
+            f"(parents[j] < j for j > 0), got {par.tolist()}"
+        )
+    return par
+
+
+def _segments(pairs: NDArray[np.intp]) -> NDArray[np.intp]:
+    """VTK line connectivity ``[2, a, b, 2, c, d, ...]`` for index pairs ``(S, 2)``."""
+    return np.column_stack([np.full(len(pairs), 2), pairs]).ravel()
+
+
+def _tube_actor(lines: pv.PolyData, radius: float, sides: int = 18) -> tuple[pv.Actor, Any]:
+    """An actor drawing ``lines`` as shaded tubes; the tube filter re-runs when points change."""
+    tube = vtkTubeFilter()
+    tube.SetInputData(lines)
+    tube.SetRadius(radius)
+    tube.SetNumberOfSides(sides)
+    tube.CappingOn()
+    mapper = vtkPolyDataMapper()
+    mapper.SetInputConnection(tube.GetOutputPort())
+    mapper.ScalarVisibilityOff()
+    actor = pv.Actor(mapper=mapper)
+    return actor, tube
+
+
+def _sphere_actor(points: pv.PolyData, radius: float) -> pv.Actor:
+    """Spheres at every point of ``points``, glyphed on the GPU (no per-event CPU glyphing)."""
+    mapper = vtkGlyph3DMapper()
+    mapper.SetInputData(points)
+    mapper.SetSourceData(pv.Sphere(radius=radius, theta_resolution=28, phi_resolution=20))
+    mapper.ScalingOff()
+    mapper.OrientOff()
+    mapper.ScalarVisibilityOff()
+    return pv.Actor(mapper=mapper)
+
+
+def _shade(actor: pv.Actor, color: str, *, specular: float = 0.35, opacity: float = 1.0) -> None:
+    prop = actor.prop
+    prop.color = color
+    prop.opacity = opacity
+    prop.ambient = 0.18
+    prop.diffuse = 0.85
+    prop.specular = specular
+    prop.specular_power = 30.0
+    prop.interpolation = "phong"
+
+
+def _smooth_edges(plotter: pv.Plotter) -> None:
+    """MSAA where a GPU draws (a display exists): free there. Headless, VTK draws on the CPU
+    (llvmpipe), where MSAA costs 5-8x per frame, so interaction stays aliased and only saved
+    screenshots are smoothed."""
+    if _headless():
+        plotter.disable_anti_aliasing()  # pyvista's theme asks for 4 samples by default
+    else:
+        plotter.enable_anti_aliasing("msaa")
+
+
+@dataclass
+class SkeletonActors:
+    """One skeleton in a scene: its meshes (updated in place) and its actors."""
+
+    name: str
+    parents: NDArray[np.intp]
+    bone_color: str
+    joint_color: str
+    points: pv.PolyData  # joints (J points), glyphed with spheres
+    bones: pv.PolyData  # the same J points, one line per (parent, child) edge
+    triads: pv.PolyData | None  # 6 points per joint: origin/tip for x, y, z
+    axis_length: float
+    actors: list[pv.Actor] = field(default_factory=list)
+
+    @property
+    def positions(self) -> Array:
+        """The joint positions currently drawn, ``(J, 3)`` (a copy)."""
+        return np.array(self.points.points, dtype=np.float64)
+
+
+class SkeletonScene:
+    """A pyvista scene of skeletons, targets and trails, updated in place.
+
+    Parameters
+    ----------
+    window_size : (width, height) in pixels.
+    ground : draw a checkered floor in the plane ``y = ground height`` (y is up).
+    camera : one of ``"iso"``, ``"front"`` (looking down -z), ``"side"`` (down -x), ``"top"``
+        (down -y), ``"follow"`` (iso, then moving with the root).
+
+    Examples
+    --------
+    >>> scene = SkeletonScene()
+    >>> scene.add_skeleton(parents, positions, name="student")   # doctest: +SKIP
+    >>> scene.set_pose(new_positions)                            # doctest: +SKIP
+    >>> scene.screenshot("pose.png")                             # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        *,
+        window_size: tuple[int, int] = (720, 540),
+        ground: bool = True,
+        camera: str = "iso",
+    ) -> None:
+        if camera not in CAMERA_PRESETS:
+            raise ValueError(f"camera must be one of {CAMERA_PRESETS}, got {camera!r}")
+        self.backend = jupyter_backend()
+        self.plotter = pv.Plotter(
+            off_screen=off_screen(), window_size=list(window_size), lighting="light_kit"
+        )
+        self.plotter.set_background(BACKGROUND[0], top=BACKGROUND[1])
+        _smooth_edges(self.plotter)
+        self.skeletons: dict[str, SkeletonActors] = {}
+        self._ground_wanted = ground
+        self._ground_actor: pv.Actor | None = None
+        self._scale = 1.0
+        self._center = np.zeros(3)
+        self._radius = 1.0
+        self._camera = camera
+        self._follow: tuple[str, Array] | None = None  # (skeleton, root position at last move)
+        self._targets: pv.PolyData | None = None
+        self._trail: pv.PolyData | None = None
+        self._trail_count = 0
+        self._widget: Any = None
+
+    # -- building (once) -------------------------------------------------------------------
+
+    def add_skeleton(
+        self,
+        parents: ArrayLike,
+        positions: ArrayLike,
+        orientations: ArrayLike | None = None,
+        *,
+        name: str | None = None,
+        color: tuple[str, str] | None = None,
+        axes: bool = False,
+        opacity: float = 1.0,
+        frame_points: ArrayLike | None = None,
+    ) -> SkeletonActors:
+        """Add a skeleton drawn as spheres (joints) and tubes (bones).
+
+        Parameters
+        ----------
+        parents : (J,) parent indices, ``parents[0] == -1``, parent before child.
+        positions : (J, 3) global joint positions ``p_j``.
+        orientations : (J, 4) global orientations ``Q_j`` (w, x, y, z); needed for ``axes``.
+        name : label in the legend (default ``"skeleton"``, ``"skeleton 2"``, ...).
+        color : (bone colour, joint colour); default: the next entry of :data:`PALETTE`.
+        axes : draw each joint's local frame (x red, y green, z blue).
+        frame_points : (..., 3) points the camera and floor must cover (e.g. a whole clip);
+            default: this pose. Only the first skeleton sets the framing.
+        """
+        par = _as_parents(parents)
+        n = par.size
+        pos = _as_positions(positions, n)
+        name = name or ("skeleton" if not self.skeletons else f"skeleton {len(self.skeletons) + 1}")
+        if name in self.skeletons:
+            raise ValueError(f"name {name!r} is already used in this scene")
+        bone_color, joint_color = color or PALETTE[len(self.skeletons) % len(PALETTE)]
+        if not self.skeletons:
+            self._frame(pos if frame_points is None else np.asarray(frame_points, np.float64),
+                        pos, par)
+        s = self._scale
+        points = pv.PolyData(pos.copy())
+        bones = pv.PolyData()
+        bones.SetPoints(points.GetPoints())  # the same vtkPoints: one write moves both
+        edges = np.column_stack([par[1:], np.arange(1, n)])
+        bones.lines = _segments(edges)
+        joints_actor = _sphere_actor(points, radius=0.022 * s)
+        bones_actor, _ = _tube_actor(bones, radius=0.011 * s)
+        _shade(joints_actor, joint_color, opacity=opacity)
+        _shade(bones_actor, bone_color, specular=0.25, opacity=opacity)
+        actors = [bones_actor, joints_actor]
+        triads = None
+        axis_length = 0.09 * s
+        if axes:
+            triads = pv.PolyData(np.zeros((6 * n, 3)))
+            triads.lines = _segments(np.arange(6 * n).reshape(-1, 2))
+            triads.point_data["rgb"] = np.tile(np.repeat(AXIS_COLORS, 2, axis=0), (n, 1))
+            triad_actor, _ = _tube_actor(triads, radius=0.0045 * s, sides=10)
+            mapper = triad_actor.mapper
+            mapper.ScalarVisibilityOn()
+            mapper.SetColorModeToDirectScalars()
+            mapper.SetScalarModeToUsePointFieldData()
+            mapper.SelectColorArray("rgb")
+            actors.append(triad_actor)
+        for actor in actors:
+            self.plotter.add_actor(actor, reset_camera=False, pickable=False)
+        skel = SkeletonActors(name, par, bone_color, joint_color, points, bones, triads,
+                              axis_length, actors)
+        self.skeletons[name] = skel
+        if triads is not None:
+            self._set_triads(skel, pos, orientations)
+        self._update_legend()
+        return skel
+
+    def _frame(self, points: Array, pose: Array, parents: NDArray[np.intp]) -> None:
+        """Size the glyphs from ``pose``; place the floor and camera to cover ``points``."""
+        pts = points.reshape(-1, 3)
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        bone = np.linalg.norm(pose[1:] - pose[parents[1:]], axis=1)
+        self._scale = float(max(np.ptp(pose, axis=0).max(), 2.5 * bone.max(initial=0.0), 1e-6))
+        self._center = (lo + hi) / 2
+        self._radius = float(max(np.linalg.norm(hi - lo) / 2, 0.5 * self._scale))
+        if self._ground_wanted:
+            self._add_ground(lo, hi)
+        self.set_camera(self._camera)
+
+    def _add_ground(self, lo: Array, hi: Array) -> None:
+        """A checkered floor under the points, tiles of a round size, y = lowest point."""
+        span = max(hi[0] - lo[0], hi[2] - lo[2]) + 1.5 * self._scale
+        tile = 10.0 ** np.floor(np.log10(self._scale / 4))  # 1, 10, 100 ... per tile
+        tile *= 5 if span / (5 * tile) > 8 else 1
+        n = int(np.ceil(span / tile)) + 1
+        center = np.round(self._center / tile) * tile
+        plane = pv.Plane(
+            center=(center[0], lo[1] - 0.022 * self._scale, center[2]),
+            direction=(0, 1, 0), i_size=n * tile, j_size=n * tile,
+            i_resolution=n, j_resolution=n,
+        )
+        i, j = np.divmod(np.arange(plane.n_cells), n)
+        plane.cell_data["tile"] = ((i + j) % 2).astype(float)
+        self._ground_actor = self.plotter.add_mesh(
+            plane, scalars="tile", cmap=list(FLOOR_COLORS), show_scalar_bar=False,
+            ambient=0.35, diffuse=0.7, specular=0.0, pickable=False, reset_camera=False,
+        )
+
+    def _update_legend(self) -> None:
+        if len(self.skeletons) < 2:
+            return
+        self.plotter.remove_legend(render=False)
+        self.plotter.add_legend(
+            [[s.name, s.bone_color] for s in self.skeletons.values()],
+            bcolor="white", border=False, face="circle", loc="upper right",
+            size=(0.15, 0.06 * len(self.skeletons)),  # pyvista pads wider boxes off-screen
+        )
+
+    # -- updating (per event, in place) ------------------------------------------------------
+
+    def skeleton(self, name: str | None = None) -> SkeletonActors:
+        """The skeleton called ``name`` (default: the first one added)."""
+        if not self.skeletons:
+            raise ValueError("the scene has no skeleton yet: call add_skeleton first")
+        if name is None:
+            return next(iter(self.skeletons.values()))
+        if name not in self.skeletons:
+            raise ValueError(f"name {name!r} is not in this scene ({list(self.skeletons)})")
+        return self.skeletons[name]
+
+    @property
+    def joint_positions(self) -> Array:
+        """The first skeleton's drawn joint positions ``(J, 3)``."""
+        return self.skeleton().positions
+
+    def set_pose(
+        self,
+        positions: ArrayLike,
+        orientations: ArrayLike | None = None,
+        *,
+        name: str | None = None,
+        render: bool = True,
+    ) -> None:
+        """Move a skeleton: overwrite its points (and triads); no mesh is rebuilt."""
+        skel = self.skeleton(name)
+        pos = _as_positions(positions, skel.parents.size)
+        skel.points.points[:] = pos  # bones share these vtkPoints
+        skel.points.GetPoints().Modified()
+        skel.points.Modified()
+        skel.bones.Modified()
+        if skel.triads is not None:
+            self._set_triads(skel, pos, orientations)
+        if self._follow is not None and self._follow[0] == skel.name:
+            self._follow_root(pos[0])
+        if render:
+            self.render()
+
+    def _set_triads(self, skel: SkeletonActors, pos: Array, orientations: ArrayLike | None) -> None:
+        if orientations is None:
+            raise ValueError(f"orientations (J, 4) are needed to draw the axes of {skel.name!r}")
+        from course.rotations import matrix_from_quat
+
+        R = matrix_from_quat(np.asarray(orientations, dtype=np.float64))
+        if R.shape != (pos.shape[0], 3, 3):
+            raise ValueError(f"orientations must have shape ({pos.shape[0]}, 4)")
+        tips = pos[:, None, :] + skel.axis_length * np.swapaxes(R, 1, 2)  # columns = local axes
+        pts = skel.triads.points.reshape(-1, 3, 2, 3)
+        pts[:, :, 0] = pos[:, None, :]
+        pts[:, :, 1] = tips
+        skel.triads.Modified()
+
+    def set_targets(self, targets: ArrayLike, *, render: bool = True) -> None:
+        """Show target markers at ``targets (K, 3)``; the marker mesh is made once per K."""
+        t = np.asarray(targets, dtype=np.float64).reshape(-1, 3)
+        if not np.all(np.isfinite(t)):
+            raise ValueError("targets contains NaN or infinite values")
+        if self._targets is None or self._targets.n_points != len(t):
+            if self._targets is not None:
+                self.plotter.remove_actor(self._targets_actor, render=False)
+            self._targets = pv.PolyData(t.copy())
+            self._targets_actor = _sphere_actor(self._targets, radius=0.035 * self._scale)
+            _shade(self._targets_actor, TARGET_COLOR, opacity=0.45)
+            self.plotter.add_actor(self._targets_actor, reset_camera=False, pickable=False)
+        else:
+            self._targets.points[:] = t
+            self._targets.Modified()
+        if render:
+            self.render()
+
+    @property
+    def target_positions(self) -> Array:
+        """The drawn target markers ``(K, 3)`` (empty when none)."""
+        return np.empty((0, 3)) if self._targets is None else np.array(self._targets.points)
+
+    def add_trail(self, capacity: int = 240) -> None:
+        """Prepare an end-effector trail of up to ``capacity`` points (a fixed-size polyline)."""
+        if capacity < 2:
+            raise ValueError(f"capacity must be at least 2, got {capacity}")
+        self._trail = pv.PolyData(np.zeros((capacity, 3)))
+        self._trail.lines = np.concatenate([[capacity], np.arange(capacity)])
+        actor = self.plotter.add_mesh(
+            self._trail, color=TRAIL_COLOR, line_width=4, render_lines_as_tubes=True,
+            reset_camera=False, pickable=False,
+        )
+        actor.visibility = False
+        self._trail_actor = actor
+        self._trail_count = 0
+
+    def push_trail(self, point: ArrayLike) -> None:
+        """Append a point to the trail (the oldest drops out when full); unused slots repeat
+        the newest point, so the polyline keeps its size and nothing is reallocated."""
+        if self._trail is None:
+            raise ValueError("call add_trail() before push_trail()")
+        pts = self._trail.points
+        p = np.asarray(point, dtype=np.float64).reshape(3)
+        if self._trail_count < len(pts):
+            pts[self._trail_count:] = p
+            self._trail_count += 1
+        else:
+            pts[:-1] = pts[1:]
+            pts[-1] = p
+        self._trail.Modified()
+        self._trail_actor.visibility = self._trail_count > 1
+
+    def set_trail(self, points: ArrayLike) -> None:
+        """Replace the trail by ``points (N, 3)`` (the newest ``capacity`` of them) at once."""
+        if self._trail is None:
+            raise ValueError("call add_trail() before set_trail()")
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)[-self._trail.n_points:]
+        if len(p) == 0:
+            self.clear_trail()
+            return
+        pts = self._trail.points
+        pts[:len(p)] = p
+        pts[len(p):] = p[-1]
+        self._trail_count = len(p)
+        self._trail.Modified()
+        self._trail_actor.visibility = len(p) > 1
+
+    def clear_trail(self) -> None:
+        self._trail_count = 0
+        if self._trail is not None:
+            self._trail_actor.visibility = False
+
+    # -- camera ------------------------------------------------------------------------------
+
+    def set_camera(self, preset: str = "iso", *, render: bool = False) -> None:
+        """Frame the scene from a preset direction: iso, front, side, top or follow."""
+        if preset not in CAMERA_PRESETS:
+            raise ValueError(f"preset must be one of {CAMERA_PRESETS}, got {preset!r}")
+        direction, up = {
+            "iso": ((0.55, 0.38, 1.0), (0, 1, 0)),
+            "follow": ((0.55, 0.38, 1.0), (0, 1, 0)),
+            "front": ((0.0, 0.12, 1.0), (0, 1, 0)),
+            "side": ((1.0, 0.12, 0.0), (0, 1, 0)),
+            "top": ((0.0, 1.0, 0.0), (0, 0, -1)),
+        }[preset]
+        d = np.asarray(direction) / np.linalg.norm(direction)
+        camera = self.plotter.camera
+        camera.view_angle = 30.0
+        distance = 1.05 * self._radius / np.tan(np.radians(15.0))
+        focal = self._center
+        if preset == "follow" and self.skeletons:
+            root = self.skeleton().positions[0]
+            focal = np.array([root[0], self._center[1], root[2]])
+            self._follow = (self.skeleton().name, root.copy())
+            distance = 1.15 * 0.6 * self._scale / np.tan(np.radians(15.0))
+        else:
+            self._follow = None
+        camera.focal_point = tuple(focal)
+        camera.position = tuple(focal + distance * d)
+        camera.up = up
+        self.plotter.renderer.camera_set = True  # else pyvista resets it at the first render
+        self.plotter.renderer.ResetCameraClippingRange()
+        self._camera = preset
+        if render:
+            self.render()
+
+    def _follow_root(self, root: Array) -> None:
+        name, last = self._follow
+        delta = np.array([root[0] - last[0], 0.0, root[2] - last[2]])
+        camera = self.plotter.camera
+        camera.focal_point = tuple(np.add(camera.focal_point, delta))
+        camera.position = tuple(np.add(camera.position, delta))
+        self.plotter.renderer.ResetCameraClippingRange()
+        self._follow = (name, root.copy())
+
+    # -- output ------------------------------------------------------------------------------
+
+    def render(self) -> None:
+        """Draw the current state (and push it to the notebook view, if one is shown)."""
+        self.plotter.renderer.ResetCameraClippingRange()
+        on_gl_thread(self.plotter.render)
+        if self._widget is not None and self.backend == "static":
+            self._widget.value = png_bytes(self.image())
+
+    def image(self) -> NDArray[np.uint8]:
+        """The rendered frame as an ``(H, W, 3)`` uint8 array (row 0 at the top)."""
+        return on_gl_thread(lambda: self.plotter.screenshot(None, return_img=True))
+
+    def screenshot(self, path: str | Path | None = None) -> NDArray[np.uint8]:
+        """Render and return the frame ``(H, W, 3)``; also write it as PNG to ``path``
+        (a saved picture is always anti-aliased, even where interaction is not)."""
+        img = on_gl_thread(self._capture, path is not None)
+        if path is not None:
+            Path(path).parent.mkdir(parents=True, exist_ok=True)
+            Path(path).write_bytes(png_bytes(img, compress_level=6))
+        return img
+
+    def _capture(self, smooth: bool) -> NDArray[np.uint8]:
+        smooth = smooth and not self.plotter.render_window.GetMultiSamples()
+        if smooth:
+            self.plotter.enable_anti_aliasing("msaa")
+        self.plotter.render()
+        img = self.plotter.screenshot(None, return_img=True)
+        if smooth:
+            self.plotter.disable_anti_aliasing()
+            self.plotter.render()
+        return img
+
+    def project(self, points: ArrayLike) -> Array:
+        """Pixel coordinates ``(N, 2)`` as (column, row), row 0 at the top, of world points
+        ``(N, 3)`` in the rendered image: the camera's composite projection
+        ``x_clip = P V [p; 1]``, then the viewport transform."""
+        w, h = self.plotter.window_size
+        ren = self.plotter.renderer
+        m = ren.GetActiveCamera().GetCompositeProjectionTransformMatrix(w / h, -1.0, 1.0)
+        M = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        clip = np.column_stack([p, np.ones(len(p))]) @ M.T
+        ndc = clip[:, :2] / clip[:, 3:4]
+        return np.column_stack([(ndc[:, 0] + 1) / 2 * w, h - (ndc[:, 1] + 1) / 2 * h])
+
+    def widget(self) -> Any:
+        """The view for a notebook layout: an ``ipywidgets.Image`` refreshed on every render
+        (static backend) or the interactive trame iframe."""
+        if self._widget is None:
+            if self.backend == "static":
+                import ipywidgets as widgets
+
+                w, h = self.plotter.window_size
+                self._widget = widgets.Image(format="png", width=w, height=h)
+                self.render()
+            else:
+                on_gl_thread(self.plotter.render)
+                self._widget = self.plotter.show(
+                    jupyter_backend=self.backend, return_viewer=True, auto_close=False
+                )
+        return self._widget
+
+    def show(self) -> None:
+        """Display the view: in a notebook as :meth:`widget`, else in a window (blocking)."""
+        from ._backend import in_jupyter_kernel
+
+        if in_jupyter_kernel():
+            from IPython.display import display
+
+            display(self.widget())
+        else:
+            self.plotter.show(auto_close=False)
+
+    def close(self) -> None:
+        on_gl_thread(self.plotter.close)
+
+
+def show_skeletons(
+    parents: ArrayLike,
+    poses: Sequence[ArrayLike] | ArrayLike,
+    names: Sequence[str] | None = None,
+    **kwargs: Any,
+) -> SkeletonScene:
+    """One scene with several poses of the same skeleton (e.g. reference vs. student),
+    in distinct colours with a legend. ``poses``: (S, J, 3) or a list of (J, 3)."""
+    arr = [np.asarray(p, dtype=np.float64) for p in poses]
+    names = list(names) if names is not None else [f"pose {i + 1}" for i in range(len(arr))]
+    if len(names) != len(arr):
+        raise ValueError(f"names has {len(names)} entries for {len(arr)} poses")
+    scene = SkeletonScene(**kwargs)
+    for pose, name in zip(arr, names, strict=True):
+        scene.add_skeleton(parents, pose, name=name, frame_points=np.stack(arr))
+    return scene
+
+
+class FrameScene:
+    """A rotated coordinate frame (x red, y green, z blue arrows) beside the faint world frame;
+    :meth:`set_rotations` moves each frame by setting its actors' transform (nothing rebuilt).
+
+    Parameters
+    ----------
+    n_frames : how many frames to show side by side (e.g. 3 for LERP / NLERP / SLERP).
+    labels : a caption under each frame.
+    """
+
+    def __init__(
+        self,
+        n_frames: int = 1,
+        labels: Sequence[str] | None = None,
+        *,
+        window_size: tuple[int, int] | None = None,
+    ) -> None:
+        self.backend = jupyter_backend()
+        size = window_size or (max(420, 300 * n_frames), 380)
+        self.plotter = pv.Plotter(off_screen=off_screen(), window_size=list(size),
+                                  lighting="light_kit")
+        self.plotter.set_background(BACKGROUND[0], top=BACKGROUND[1])
+        _smooth_edges(self.plotter)
+        self.offsets = [np.array([2.6 * (i - (n_frames - 1) / 2), 0.0, 0.0])
+                        for i in range(n_frames)]
+        self._arrows: list[list[pv.Actor]] = []
+        arrow = [pv.Arrow(start=(0, 0, 0), direction=np.eye(3)[a], tip_length=0.22,
+                          tip_radius=0.07, shaft_radius=0.028) for a in range(3)]
+        for i, off in enumerate(self.offsets):
+            for a in range(3):  # the world frame, faint and thin
+                ghost = pv.Line(off, off + 1.15 * np.eye(3)[a])
+                self.plotter.add_mesh(ghost, color=tuple(AXIS_COLORS[a] / 255), opacity=0.35,
+                                      line_width=2, reset_camera=False)
+            actors = []
+            for a in range(3):
+                actor = self.plotter.add_mesh(arrow[a], color=tuple(AXIS_COLORS[a] / 255),
+                                              smooth_shading=True, specular=0.4,
+                                              reset_camera=False)
+                actors.append(actor)
+            self._arrows.append(actors)
+            if labels is not None:
+                self.plotter.add_point_labels(
+                    [off + np.array([0, -1.05, 0])], [labels[i]], font_size=18,
+                    shape=None, show_points=False, text_color="#2b3440", always_visible=True,
+                )
+        self.rotations = np.tile(np.eye(3), (n_frames, 1, 1))
+        # frames 2.6 apart, arrows up to 1.15 long; the view angle is vertical, so a wide
+        # window fits its width / aspect
+        radius = max(1.5, 1.3 * n_frames * size[1] / size[0])
+        direction = np.array([0.45, 0.35, 1.0]) / np.linalg.norm([0.45, 0.35, 1.0])
+        camera = self.plotter.camera
+        camera.view_angle = 30.0
+        focal = np.array([0.0, 0.15, 0.0])
+        camera.focal_point = tuple(focal)
+        camera.position = tuple(focal + 1.1 * radius / np.tan(np.radians(15.0)) * direction)
+        camera.up = (0.0, 1.0, 0.0)
+        self.plotter.renderer.camera_set = True
+        self._widget: Any = None
+
+    def set_rotations(self, matrices: ArrayLike, *, render: bool = True) -> None:
+        """Set each frame's linear map ``(n_frames, 3, 3)`` (a rotation, or a scaled one to
+        show a non-unit quaternion); the arrows are transformed, not rebuilt."""
+        R = np.asarray(matrices, dtype=np.float64).reshape(-1, 3, 3)
+        if len(R) != len(self._arrows):
+            raise ValueError(f"matrices must have shape ({len(self._arrows)}, 3, 3)")
+        self.rotations = R.copy()
+        for actors, off, Ri in zip(self._arrows, self.offsets, R, strict=True):
+            T = np.eye(4)
+            T[:3, :3] = Ri
+            T[:3, 3] = off
+            for actor in actors:
+                actor.user_matrix = T
+        if render:
+            self.render()
+
+    render = SkeletonScene.render
+    image = SkeletonScene.image
+    screenshot = SkeletonScene.screenshot
+    _capture = SkeletonScene._capture
+    project = SkeletonScene.project
+    widget = SkeletonScene.widget
+    show = SkeletonScene.show
+    close = SkeletonScene.close

@@ -1,0 +1,136 @@
+"""JupyterLab in headless Chromium: run the notebook, drag a slider, see the numbers and the
+3D view change. Screenshots go to test-artifacts/. Needs the Debian package `chromium`."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+NOTEBOOK = Path(__file__).with_name("e2e_views.ipynb")
+ARTIFACTS = REPO / "test-artifacts"
+TOKEN = "course-e2e"
+KERNEL_IDLE = ("window.jupyterapp?.shell.currentWidget?.sessionContext?.session?.kernel"
+               "?.status === 'idle'")
+RUN_ALL = "() => { window.jupyterapp.commands.execute('notebook:run-all-cells'); }"  # no await
+
+
+def _chromium() -> str:
+    path = shutil.which("chromium") or shutil.which("chromium-browser")
+    if path is None:
+        message = "chromium not found: apt-get install chromium (make e2e does it as root)"
+        if os.environ.get("CI", "").lower() == "true":
+            pytest.fail(message)
+        pytest.skip(message)
+    return path
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    """JupyterLab on a free localhost port, serving a copy of the notebook (never saved back)."""
+    root = tmp_path_factory.mktemp("lab")
+    shutil.copy(NOTEBOOK, root / NOTEBOOK.name)
+    port = _free_port()
+    env = {
+        **os.environ,
+        "PYVISTA_JUPYTER_BACKEND": "static",  # the 3D view is an image widget
+        "VTK_DEFAULT_OPENGL_WINDOW": "vtkEGLRenderWindow",
+        "PYVISTA_OFF_SCREEN": "true",
+        "JUPYTERLAB_SETTINGS_DIR": str(root / ".settings"),
+        "JUPYTERLAB_WORKSPACES_DIR": str(root / ".workspaces"),
+        "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
+    }
+    cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}",
+           "--ServerApp.ip=127.0.0.1", f"--IdentityProvider.token={TOKEN}", "--allow-root",
+           f"--ServerApp.root_dir={root}", "--LabApp.expose_app_in_browser=True",
+           "--LabApp.news_url=", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate"]
+    log = open(root / "lab.log", "wb")  # noqa: SIM115 (closed below)
+    server = subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                urllib.request.urlopen(f"{base}/api/status?token={TOKEN}", timeout=2)
+                break
+            except OSError:
+                if server.poll() is not None or time.monotonic() > deadline:
+                    raise RuntimeError((root / "lab.log").read_text()[-3000:]) from None
+                time.sleep(0.3)
+        yield base
+    finally:
+        server.terminate()
+        try:
+            server.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            server.kill()
+        log.close()
+
+
+def test_slider_moves_the_skeleton_in_jupyterlab(lab):
+    from playwright.sync_api import sync_playwright
+
+    ARTIFACTS.mkdir(exist_ok=True)
+    with sync_playwright() as p:
+        browser = p.chromium.launch(
+            executable_path=_chromium(),
+            args=["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking"],
+        )
+        page = browser.new_page(viewport={"width": 1400, "height": 1000})
+        try:
+            page.goto(f"{lab}/lab/tree/{NOTEBOOK.name}?reset&token={TOKEN}")
+            page.wait_for_function("window.jupyterapp && document.querySelector('.jp-Notebook')",
+                                   timeout=60_000)
+            page.wait_for_function(KERNEL_IDLE, timeout=60_000)
+            page.evaluate(RUN_ALL)
+            image = page.locator(".widget-image").first
+            image.wait_for(state="visible", timeout=60_000)
+            readout = page.locator(".widget-html-content").filter(has_text="p").last
+            page.wait_for_function(
+                "[...document.querySelectorAll('.widget-html-content')]"
+                ".some(e => e.textContent.includes('p'))", timeout=30_000)
+            widget_area = page.locator(".jp-OutputArea-output").last
+            widget_area.scroll_into_view_if_needed()
+            page.wait_for_timeout(500)
+            text_before = readout.inner_text()
+            image_before = image.screenshot(path=str(ARTIFACTS / "e2e_view_before.png"))
+            widget_area.screenshot(path=str(ARTIFACTS / "e2e_widget_before.png"))
+
+            handle = page.locator(".widget-slider .noUi-handle").first
+            handle.scroll_into_view_if_needed()
+            box = handle.bounding_box()
+            x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+            page.mouse.move(x, y)
+            page.mouse.down()
+            page.mouse.move(x + 60, y, steps=8)
+            page.mouse.up()
+
+            page.wait_for_function(
+                "([t]) => ![...document.querySelectorAll('.widget-html-content')]"
+                ".some(e => e.innerText === t)", arg=[text_before], timeout=20_000)
+            page.wait_for_timeout(800)  # the last image of the drag
+            widget_area.scroll_into_view_if_needed()
+            text_after = readout.inner_text()
+            image_after = image.screenshot(path=str(ARTIFACTS / "e2e_view_after.png"))
+            widget_area.screenshot(path=str(ARTIFACTS / "e2e_widget_after.png"))
+        except Exception:
+            page.screenshot(path=str(ARTIFACTS / "e2e_failure.png"), full_page=True)
+            raise
+        finally:
+            browser.close()
+    assert text_after != text_before
+    assert image_after != image_before, "the 3D view did not change"

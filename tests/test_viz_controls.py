@@ -1,0 +1,150 @@
+"""course.viz.controls: drive every control from code and check the scene and readouts."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
+
+from course.viz import controls  # noqa: E402
+
+
+def _same_rotation(q, ref: Rotation) -> None:
+    np.testing.assert_allclose(Rotation.from_quat(q, scalar_first=True).as_matrix(),
+                               ref.as_matrix(), atol=1e-9)
+
+
+def test_rotation_explorer_warns_at_gimbal_lock_and_matches_scipy():
+    ex = controls.rotation_explorer("XYZ", (0.0, np.pi / 2, 0.0))
+    try:
+        assert ex.gimbal_lock and "Gimbal lock" in ex.warning.value
+        ex.sliders["angle0"].value = 30.0
+        ex.sliders["angle1"].value = 40.0
+        ex.sliders["angle2"].value = -70.0
+        assert not ex.gimbal_lock and ex.warning.value == ""
+        ref = Rotation.from_euler("XYZ", [30, 40, -70], degrees=True)
+        np.testing.assert_allclose(ex.matrix, ref.as_matrix(), atol=1e-12)
+        _same_rotation(ex.quaternion, ref)
+        np.testing.assert_allclose(ex.scene.rotations[0], ref.as_matrix(), atol=1e-12)
+        ex.order.value = "zxz"  # proper Euler, extrinsic: locked when the middle angle is 0
+        ex.sliders["angle1"].value = 0.0
+        assert ex.gimbal_lock
+        _same_rotation(ex.quaternion, Rotation.from_euler("zxz", [30, 0, -70], degrees=True))
+        assert "+0.000" in ex.readout.value or "-0.000" in ex.readout.value
+        assert ex.gimbal_image.value[:4] == b"\x89PNG"
+    finally:
+        ex.close()
+
+
+def test_slerp_explorer_lerp_shrinks_and_slerp_moves_evenly():
+    ex = controls.slerp_explorer((0, 0, 0), (0, 120, 0), t=0.25)
+    try:
+        q = ex.quaternions
+        assert np.linalg.norm(q["LERP"]) < 1 - 1e-3
+        np.testing.assert_allclose(np.linalg.norm(q["SLERP"]), 1)
+        _same_rotation(q["SLERP"], Rotation.from_euler("Y", 30, degrees=True))
+        # the LERP frame is scaled by |q|^2, the others are rotations
+        np.testing.assert_allclose(np.linalg.det(ex.scene.rotations[0]),
+                                   np.linalg.norm(q["LERP"]) ** 6, rtol=1e-9)
+        np.testing.assert_allclose(np.linalg.det(ex.scene.rotations[1:]), 1)
+        ex.sliders["t"].value = 0.5
+        _same_rotation(ex.quaternions["SLERP"], Rotation.from_euler("Y", 60, degrees=True))
+        assert "SLERP" in ex.readout.value
+    finally:
+        ex.close()
+
+
+def test_fk_explorer_slider_moves_children_by_the_fk_result():
+    from course.skeleton import chain
+
+    arm = chain([1.0, 0.8, 0.5], axes=[0, 0, 1])
+    ex = controls.fk_explorer(arm)
+    try:
+        before = ex.scene.joint_positions
+        np.testing.assert_allclose(before[:, 0], [0, 1, 1.8, 2.3])
+        ex.sliders[f"{arm.names[1]}.0"].value = 90.0  # the elbow turns about +z
+        after = ex.scene.joint_positions
+        np.testing.assert_allclose(after[:2], before[:2], atol=1e-12)  # parents stay
+        elbow = before[1]
+        R = Rotation.from_euler("z", 90, degrees=True)
+        np.testing.assert_allclose(after[2:], elbow + R.apply(before[2:] - elbow), atol=1e-9)
+        assert arm.names[1] in ex.readout.value
+        ex.reset()
+        np.testing.assert_allclose(ex.scene.joint_positions, before, atol=1e-12)
+        assert all(s.value == 0 for s in ex.sliders.values())
+    finally:
+        ex.close()
+
+
+@pytest.fixture(scope="module")
+def sample_motion():
+    from course import data
+
+    return data.load("wave")
+
+
+def test_bvh_player_shows_the_precomputed_frame(sample_motion):
+    player = controls.bvh_player(sample_motion, camera="iso")
+    try:
+        positions, _ = sample_motion.forward_kinematics()
+        player.sliders["frame"].value = 37
+        np.testing.assert_allclose(player.scene.joint_positions, positions[37])
+        assert "frame 37" in player.readout.value
+        player.sliders["speed"].value = 2.0
+        fps = 1 / sample_motion.frame_time
+        shown = 1000.0 * player.play.step / player.play.interval  # frames of clip per second
+        assert abs(shown - 2 * fps) / (2 * fps) < 0.1
+        player.sliders["loop"].value = False
+        assert player.play.repeat is False
+    finally:
+        player.close()
+
+
+def _ik_ready() -> bool:
+    import course.ik
+
+    return hasattr(course.ik, "solve")
+
+
+@pytest.mark.skipif(not _ik_ready(), reason="course.ik.solve is not written yet")
+def test_ik_playground_solves_and_replays():
+    from course.skeleton import chain
+
+    arm = chain([1.0] * 7, axes=[0, 0, 1])
+    pg = controls.ik_playground(arm, methods=["ccd"])
+    try:
+        pg.sliders["x"].value, pg.sliders["y"].value, pg.sliders["z"].value = 3.0, 4.0, 0.0
+        target = pg.target
+        r = pg.result
+        fk, _ = arm.forward_kinematics(r.local_rotations, np.zeros(3))
+        np.testing.assert_allclose(fk[-1], r.positions[-1], atol=1e-9)
+        assert r.converged and np.linalg.norm(fk[-1] - target) <= pg.sliders["tol"].value
+        np.testing.assert_allclose(pg.scene.target_positions[0], target)
+        pg.sliders["iteration"].value = 0
+        np.testing.assert_allclose(pg.scene.skeleton("solution").positions, pg.frames[0])
+        assert "iteration 0" in pg.readout.value
+    finally:
+        pg.close()
+
+
+@pytest.mark.skipif(not _ik_ready(), reason="course.ik.solve is not written yet")
+def test_full_body_ik_reaches_the_moved_target(sample_motion):
+    fb = controls.full_body_ik(sample_motion, 10)
+    try:
+        name = fb.sliders["edit"].value
+        fb.sliders["y"].value = fb.sliders["y"].value + 3.0
+        j = fb.skeleton.index(name)
+        drawn = fb.scene.skeleton("IK").positions
+        assert np.linalg.norm(drawn[j] - fb.targets[name]) < np.linalg.norm(
+            fb.positions[j] - fb.targets[name])
+    finally:
+        fb.close()

@@ -1,0 +1,171 @@
+"""course.viz.scene: render known poses off-screen and check the pixels, not just the file."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
+
+pytest.importorskip("pyvista")
+
+from course.viz.scene import PALETTE, SkeletonScene, show_skeletons  # noqa: E402
+
+# A small figure, y up: hips, spine, head, two arms, two legs (units ~ cm).
+PARENTS = np.array([-1, 0, 1, 2, 2, 4, 2, 6, 0, 8, 0, 10])
+POSE = np.array([
+    [0, 90, 0], [0, 120, 0], [0, 150, 0], [0, 165, 0],
+    [22, 140, 0], [45, 125, 0], [-22, 140, 0], [-45, 125, 0],
+    [10, 50, 0], [10, 5, 0], [-10, 50, 0], [-10, 5, 0],
+], dtype=float)
+JOINT_RGB = np.array([int(PALETTE[0][1][i:i + 2], 16) for i in (1, 3, 5)])
+
+
+def _rgb(hex_color: str) -> np.ndarray:
+    return np.array([int(hex_color[i:i + 2], 16) for i in (1, 3, 5)])
+
+
+def _near(img: np.ndarray, uv: np.ndarray, color: np.ndarray, tol: float = 70.0) -> np.ndarray:
+    """For each pixel position, whether some pixel within 1 px has ``color`` (shaded: tol)."""
+    out = []
+    for c, r in np.round(uv).astype(int):
+        patch = img[r - 1:r + 2, c - 1:c + 2, :3].reshape(-1, 3).astype(float)
+        out.append(np.linalg.norm(patch - color, axis=1).min() < tol)
+    return np.array(out)
+
+
+def _distance_to_segments(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Pixel distance of each point p (N, 2) to the nearest segment a-b (S, 2)."""
+    ab = b - a
+    t = np.clip(np.einsum("nsk,sk->ns", p[:, None] - a, ab) / np.sum(ab * ab, axis=1), 0, 1)
+    closest = a + t[..., None] * ab
+    return np.linalg.norm(p[:, None] - closest, axis=2).min(axis=1)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    sc = SkeletonScene(window_size=(480, 400), ground=False, camera="front")
+    sc.add_skeleton(PARENTS, POSE, name="student")
+    yield sc
+    sc.close()
+
+
+def test_each_joint_is_drawn_at_its_projection_and_background_elsewhere(scene):
+    scene.set_pose(POSE)
+    img = scene.screenshot()
+    assert img.shape == (400, 480, 3)
+    uv = scene.project(POSE)
+    assert np.all(_near(img, uv, JOINT_RGB)), "a joint is not covered by the joint colour"
+    # pixels far (> 25 px) from every bone and joint show the sky gradient: per row, the colour
+    # of the left border column
+    rng = np.random.default_rng(0)
+    samples = rng.uniform([5, 5], [475, 395], size=(400, 2))
+    far = _distance_to_segments(samples, uv[PARENTS[1:]], uv[1:]) > 25
+    assert far.sum() > 200
+    cols, rows = np.round(samples[far]).astype(int).T
+    diff = np.abs(img[rows, cols].astype(int) - img[rows, 0].astype(int)).max()
+    assert diff <= 3
+
+
+def test_front_camera_looks_down_minus_z_with_y_up(scene):
+    scene.set_camera("front")
+    u = scene.project(np.array([[0, 100, 0], [30, 100, 0], [0, 130, 0]]))
+    assert u[1, 0] > u[0, 0] + 10 and abs(u[1, 1] - u[0, 1]) < 3  # +x to the right
+    assert u[2, 1] < u[0, 1] - 10  # +y up (rows grow downwards)
+    scene.set_camera("top")
+    u = scene.project(np.array([[0, 100, 0], [30, 100, 0], [0, 100, 30]]))
+    assert u[1, 0] > u[0, 0] + 10 and u[2, 1] > u[0, 1] + 10  # +x right, +z down
+    scene.set_camera("side")
+    u = scene.project(np.array([[0, 100, 0], [0, 100, -30]]))
+    assert u[1, 0] > u[0, 0] + 10  # looking down -x: -z to the right
+    scene.set_camera("front")
+
+
+def test_set_pose_moves_points_in_place(scene):
+    skel = scene.skeleton()
+    meshes = (id(skel.points), id(skel.bones), skel.points.GetPoints())
+    raised = POSE.copy()
+    raised[4:6] = [[22, 150, 0], [40, 172, 0]]  # the left arm up
+    scene.set_pose(raised)
+    assert (id(skel.points), id(skel.bones), skel.points.GetPoints()) == meshes
+    np.testing.assert_allclose(scene.joint_positions, raised)
+    np.testing.assert_allclose(np.asarray(skel.bones.points), raised)  # shared vtkPoints
+    img = scene.screenshot()
+    assert np.all(_near(img, scene.project(raised), JOINT_RGB))
+    old_hand = scene.project(POSE[5:6])  # where the hand was: now background
+    c, r = np.round(old_hand[0]).astype(int)
+    assert np.abs(img[r, c].astype(int) - img[r, 0].astype(int)).max() <= 3
+    scene.set_pose(POSE)
+
+
+def test_axis_triads_follow_the_orientations():
+    rot = Rotation.from_euler("ZYX", [[0.3 * j, 0.2, -0.1 * j] for j in range(len(PARENTS))])
+    quats = rot.as_quat(scalar_first=True)
+    sc = SkeletonScene(window_size=(320, 280), ground=False)
+    try:
+        skel = sc.add_skeleton(PARENTS, POSE, quats, axes=True)
+        tips = np.asarray(skel.triads.points).reshape(-1, 3, 2, 3)
+        np.testing.assert_allclose(tips[:, :, 0], np.repeat(POSE[:, None], 3, axis=1))
+        expected = POSE[:, None] + skel.axis_length * np.swapaxes(rot.as_matrix(), 1, 2)
+        np.testing.assert_allclose(tips[:, :, 1], expected, atol=1e-9)
+        img = sc.screenshot()
+        x_tip = sc.project(tips[0, 0, 1])  # the root's x axis tip is red
+        assert _near(img, x_tip, np.array([230, 57, 70]), tol=90)[0]
+        with pytest.raises(ValueError, match="orientations"):
+            sc.set_pose(POSE)
+    finally:
+        sc.close()
+
+
+def test_two_skeletons_have_distinct_colours_a_legend_and_a_ground(tmp_path):
+    shifted = POSE + [70, 0, 0]
+    sc = show_skeletons(PARENTS, [POSE, shifted], names=["reference", "student"],
+                        window_size=(560, 400), camera="front")
+    try:
+        assert list(sc.skeletons) == ["reference", "student"]
+        assert sc.skeletons["reference"].joint_color != sc.skeletons["student"].joint_color
+        assert sc.plotter.legend is not None
+        img = sc.screenshot(tmp_path / "two.png")
+        assert (tmp_path / "two.png").stat().st_size > 5000
+        ref = _near(img, sc.project(POSE[1:3]), _rgb(PALETTE[0][1]))
+        stu = _near(img, sc.project(shifted[1:3]), _rgb(PALETTE[1][1]))
+        assert ref.all() and stu.all()
+        # the floor sits just under the lowest joint, across the view below the feet
+        below = sc.project(np.array([[35.0, 0.0, 20.0]]))[0]
+        c, r = np.round(below).astype(int)
+        floor = img[r, c].astype(int)
+        assert np.abs(floor - img[r, 0].astype(int)).max() > 10 or floor.std() < 8
+    finally:
+        sc.close()
+
+
+def test_targets_and_trail_update_in_place(scene):
+    scene.set_targets([[40, 160, 0], [-40, 160, 0]])
+    np.testing.assert_allclose(scene.target_positions, [[40, 160, 0], [-40, 160, 0]])
+    mesh = scene._targets
+    scene.set_targets([[30, 150, 0], [-30, 150, 0]])
+    assert scene._targets is mesh
+    img = scene.screenshot()
+    c, r = np.round(scene.project([[30, 150, 0]])[0]).astype(int)
+    pixel, sky = img[r, c].astype(int), img[r, 0].astype(int)
+    assert pixel[0] - pixel[2] > sky[0] - sky[2] + 40  # translucent red over the sky
+    scene.add_trail(capacity=4)
+    for k in range(6):
+        scene.push_trail([k, 0, 0])
+    np.testing.assert_allclose(np.asarray(scene._trail.points)[:, 0], [2, 3, 4, 5])
+    scene.clear_trail()
+
+
+def test_bad_input_names_the_argument(scene):
+    with pytest.raises(ValueError, match="positions"):
+        scene.set_pose(POSE[:3])
+    with pytest.raises(ValueError, match="parents"):
+        SkeletonScene.add_skeleton(scene, [0, 0], POSE[:2])
+    with pytest.raises(ValueError, match="camera"):
+        SkeletonScene(camera="diagonal")
+    with pytest.raises(ValueError, match="already used"):
+        scene.add_skeleton(PARENTS, POSE, name="student")
