@@ -114,6 +114,18 @@ def _shade(actor: pv.Actor, color: str, *, specular: float = 0.35, opacity: floa
     prop.interpolation = "phong"
 
 
+def _new_plotter(window_size: Sequence[int]) -> pv.Plotter:
+    """An off-screen-aware plotter whose every render runs on the GL thread: pyvista also
+    renders from inside ``add_actor``, camera setters and ``show``, not only when we ask."""
+    plotter = pv.Plotter(off_screen=off_screen(), window_size=list(window_size),
+                         lighting="light_kit")
+    render = plotter.render
+    plotter.render = lambda: on_gl_thread(render)  # type: ignore[method-assign]
+    plotter.set_background(BACKGROUND[0], top=BACKGROUND[1])
+    _smooth_edges(plotter)
+    return plotter
+
+
 def _smooth_edges(plotter: pv.Plotter) -> None:
     """MSAA where a GPU draws (a display exists): free there. Headless, VTK draws on the CPU
     (llvmpipe), where MSAA costs 5-8x per frame, so interaction stays aliased and only saved
@@ -172,11 +184,7 @@ class SkeletonScene:
         if camera not in CAMERA_PRESETS:
             raise ValueError(f"camera must be one of {CAMERA_PRESETS}, got {camera!r}")
         self.backend = jupyter_backend()
-        self.plotter = pv.Plotter(
-            off_screen=off_screen(), window_size=list(window_size), lighting="light_kit"
-        )
-        self.plotter.set_background(BACKGROUND[0], top=BACKGROUND[1])
-        _smooth_edges(self.plotter)
+        self.plotter = _new_plotter(window_size)
         self.skeletons: dict[str, SkeletonActors] = {}
         self._ground_wanted = ground
         self._ground_actor: pv.Actor | None = None
@@ -476,7 +484,7 @@ class SkeletonScene:
     def render(self) -> None:
         """Draw the current state (and push it to the notebook view, if one is shown)."""
         self.plotter.renderer.ResetCameraClippingRange()
-        on_gl_thread(self.plotter.render)
+        self.plotter.render()
         if self._widget is not None and self.backend == "static":
             self._widget.value = png_bytes(self.image())
 
@@ -528,7 +536,7 @@ class SkeletonScene:
                 self._widget = widgets.Image(format="png", width=w, height=h)
                 self.render()
             else:
-                on_gl_thread(self.plotter.render)
+                self.plotter.render()
                 self._widget = self.plotter.show(
                     jupyter_backend=self.backend, return_viewer=True, auto_close=False
                 )
@@ -586,10 +594,7 @@ class FrameScene:
     ) -> None:
         self.backend = jupyter_backend()
         size = window_size or (max(420, 300 * n_frames), 380)
-        self.plotter = pv.Plotter(off_screen=off_screen(), window_size=list(size),
-                                  lighting="light_kit")
-        self.plotter.set_background(BACKGROUND[0], top=BACKGROUND[1])
-        _smooth_edges(self.plotter)
+        self.plotter = _new_plotter(size)
         self.offsets = [np.array([2.6 * (i - (n_frames - 1) / 2), 0.0, 0.0])
                         for i in range(n_frames)]
         self._arrows: list[list[pv.Actor]] = []
