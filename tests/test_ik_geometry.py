@@ -21,7 +21,7 @@ from course.ik import (
     two_link,
 )
 from course.ik._chains import build_model
-from course.rotations import quat_from_rotvec
+from course.rotations import matrix_from_quat, quat_from_rotvec
 
 
 def _bones(P: np.ndarray) -> np.ndarray:
@@ -237,3 +237,27 @@ def test_ccd_positions_reach():
         reached += err < 1e-4
         np.testing.assert_allclose(_bones(P), 1.0, atol=1e-9)
     assert reached >= 18  # CCD can crawl near full extension; see test_ik_solvers for rates
+
+
+def test_arc_turn_matches_arc_matrix_including_opposite_and_zero():
+    """The serial path's shortest arc (quaternion components, floats and arrays) is the general
+    path's arc_matrix: generic pairs, exactly opposite pairs (a half turn about the same
+    perpendicular axis) and a zero vector (the identity)."""
+    from course.ik._serial import ARRAYS, FLOATS, arc_turn
+    from course.ik._small import arc_matrix
+
+    rng = np.random.default_rng(21)
+    u = rng.normal(size=(12, 3))
+    v = rng.normal(size=(12, 3))
+    v[:4] = -2.5 * u[:4]  # opposite, u in every orientation
+    u[4] = [3.0, 0.1, -0.2]
+    v[4] = -u[4]  # opposite along x
+    u[5] = 0.0
+    v[6] = 0.0
+    want = arc_matrix(u, v)
+    q = np.stack(arc_turn(tuple(u.T), tuple(v.T), ARRAYS), -1)
+    np.testing.assert_allclose(np.linalg.norm(q, axis=-1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(matrix_from_quat(q), want, atol=1e-9)
+    for i in range(len(u)):
+        one = arc_turn(tuple(u[i].tolist()), tuple(v[i].tolist()), FLOATS)
+        np.testing.assert_allclose(one, q[i], atol=1e-12)

@@ -244,20 +244,76 @@ def rotvec_turn(r: Vec, ops: Any) -> Quat:
 def arc_turn(u: Vec, v: Vec, ops: Any) -> Quat:
     r"""Shortest arc taking direction ``u`` onto ``v``: :math:`(\lVert u\rVert\lVert v\rVert +
     u\cdot v,\ u\times v)` normalised; a half turn about an axis perpendicular to ``u`` when
-    they are opposite; the identity when either is zero."""
-    nn = ops.sqrt(dot(u, u) * dot(v, v))
+    they are opposite; the identity when either is shorter than ``TINY`` (as
+    :func:`course.ik._small.arc_matrix`)."""
+    uu, vv = dot(u, u), dot(v, v)
+    nn = ops.sqrt(uu * vv)
     w, (x, y, z) = nn + dot(u, v), cross(u, v)
-    # Opposite: any axis perpendicular to u (cross u with x, or with y if u is along x).
-    along_x = ops.abs(u[0]) * ops.abs(u[0]) > 0.5 * dot(u, u)
-    px, py, pz = ops.where(along_x, -u[2], 0.0), ops.where(along_x, 0.0, u[2]), \
-        ops.where(along_x, u[1], -u[1])
+    # Opposite: turn about u x (the coordinate axis of u's smallest component), as arc_matrix.
+    ax, ay, az = ops.abs(u[0]), ops.abs(u[1]), ops.abs(u[2])
+    use_x = ops.both(ax <= ay, ax <= az)
+    use_y = ops.both(ops.invert(use_x), ay <= az)
+    px, py, pz = ops.select(use_x, (0.0, u[2], -u[1]),  # u x (1, 0, 0)
+                            ops.select(use_y, (-u[2], 0.0, u[0]), (u[1], -u[0], 0.0)))
     opposite = w <= TINY * nn
     w, x, y, z = (ops.where(opposite, 0.0, w), ops.where(opposite, px, x),
                   ops.where(opposite, py, y), ops.where(opposite, pz, z))
     n = ops.sqrt(w * w + x * x + y * y + z * z)
-    degenerate = n <= TINY * TINY
+    degenerate = ops.minimum(uu, vv) < TINY * TINY  # either vector (nearly) zero
     inv = 1.0 / ops.where(degenerate, 1.0, n)
-    return (ops.where(degenerate, 1.0, w * inv), x * inv, y * inv, z * inv)
+    return (ops.where(degenerate, 1.0, w * inv), ops.where(degenerate, 0.0, x * inv),
+            ops.where(degenerate, 0.0, y * inv), ops.where(degenerate, 0.0, z * inv))
+
+
+def cap_angle(q: Quat, cap: float, ops: Any) -> Quat:
+    r"""``q`` with its rotation angle :math:`2\,\mathrm{atan2}(\lVert v\rVert, |w|)` capped at
+    ``cap``, keeping its axis."""
+    w, x, y, z = q
+    s = ops.sqrt(x * x + y * y + z * z)
+    over = 2.0 * ops.atan2(s, ops.abs(w)) > cap
+    k = math.sin(0.5 * cap) / ops.where(s > TINY, s, 1.0)
+    sign = ops.where(w < 0, -1.0, 1.0)
+    return (ops.where(over, sign * math.cos(0.5 * cap), w), ops.where(over, x * k, x),
+            ops.where(over, y * k, y), ops.where(over, z * k, z))
+
+
+def limit(R: Quat, axis: Vec | None, lo: float, hi: float | None, ops: Any) -> Quat:
+    r"""A local rotation projected into its limit: a hinge's angle
+    :math:`\theta = \mathrm{atan2}(2w\,(v\cdot\hat a),\ w^2 - \lVert v\rVert^2)` clipped to
+    ``[lo, hi]``; a ball's (``axis`` None) rotation angle capped at ``lo``."""
+    if axis is None:
+        return cap_angle(R, lo, ops)
+    w, x, y, z = R
+    theta = ops.atan2(2.0 * w * dot((x, y, z), axis), w * w - (x * x + y * y + z * z))
+    return qmul(axis_turn(axis, ops.minimum(ops.maximum(theta, lo), hi) - theta, ops), R)
+
+
+def aim(R: Quat, parent: Quat, axis: Vec | None, u: Vec, w: Vec, ops: Any,
+        max_angle: float | None = None) -> Quat:
+    r"""Turn a joint so that the world direction ``u`` (from its pivot) points along ``w``,
+    the step CCD takes at every joint and FABRIK's backward pass at every bone.
+
+    A hinge (``axis`` :math:`\hat a` in the parent frame, world :math:`a = Q_{i-1}\hat a`)
+    turns by the angle between the projections of ``u`` and ``w`` on its plane,
+    :math:`\mathrm{atan2}(a\cdot(u\times w),\ u\cdot w - (u\cdot a)(w\cdot a))`, so
+    :math:`R \leftarrow \exp(\theta\hat a) R`; a ball joint by the shortest arc ``q`` from
+    ``u`` to ``w``, a world turn, so :math:`R \leftarrow Q_{i-1}^{-1} q\, Q_{i-1} R`.
+    ``max_angle`` caps the turn. The result is renormalised: CCD and FABRIK turn every joint
+    hundreds of times, and rounding must not build up in its length.
+    """
+    if axis is not None:
+        a = qrot(parent, axis)
+        theta = ops.atan2(dot(a, cross(u, w)), dot(u, w) - dot(u, a) * dot(w, a))
+        if max_angle is not None:
+            theta = ops.minimum(ops.maximum(theta, -max_angle), max_angle)
+        qw, qx, qy, qz = qmul(axis_turn(axis, theta, ops), R)
+    else:
+        turn = arc_turn(u, w, ops)
+        if max_angle is not None:
+            turn = cap_angle(turn, max_angle, ops)
+        qw, qx, qy, qz = qmul(qmul(qconj(parent), qmul(turn, parent)), R)
+    inv = 1.0 / ops.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+    return (qw * inv, qx * inv, qy * inv, qz * inv)
 
 
 # --------------------------------------------------------------------------- the chain
@@ -330,26 +386,10 @@ class SerialChain:
 
     @staticmethod
     def project(R: list[Quat], limits: list[tuple], ops: Any) -> list[Quat]:
-        r"""Variables projected into their :meth:`limits`: a hinge's angle
-        :math:`\theta = \mathrm{atan2}(2w\,(v\cdot\hat a),\ w^2 - \lVert v\rVert^2)` clipped to
-        ``[lo, hi]``; a ball's rotation angle :math:`2\,\mathrm{atan2}(\lVert v\rVert, |w|)`
-        capped, keeping its axis."""
+        """Variables projected into their :meth:`limits` (:func:`limit`)."""
         R = list(R)
         for v, axis, lo, hi in limits:
-            w, x, y, z = R[v]
-            vv = x * x + y * y + z * z
-            if axis is not None:
-                theta = ops.atan2(2.0 * w * dot((x, y, z), axis), w * w - vv)
-                fix = ops.minimum(ops.maximum(theta, lo), hi) - theta
-                R[v] = qmul(axis_turn(axis, fix, ops), R[v])
-            else:
-                s = ops.sqrt(vv)
-                over = 2.0 * ops.atan2(s, ops.abs(w)) > lo
-                k = math.sin(0.5 * lo) / ops.where(s > TINY, s, 1.0)
-                sign = ops.where(w < 0, -1.0, 1.0)
-                R[v] = (ops.where(over, sign * math.cos(0.5 * lo), w),
-                        ops.where(over, x * k, x), ops.where(over, y * k, y),
-                        ops.where(over, z * k, z))
+            R[v] = limit(R[v], axis, lo, hi, ops)
         return R
 
 
@@ -486,52 +526,74 @@ def solve_jacobian(
 # --------------------------------------------------------------------------- FABRIK
 def toward(frm: Vec, to: Vec, length: Scalar, fallback: Vec, ops: Any) -> Vec:
     r""":math:`p_{frm} + d\,\widehat{(p_{to} - p_{frm})}`; along ``fallback`` (a unit vector)
-    where the two points coincide."""
-    dx, dy, dz = sub(to, frm)
+    where the two points coincide. (Written out: FABRIK spends its time here.)"""
+    fx, fy, fz = frm
+    dx, dy, dz = to[0] - fx, to[1] - fy, to[2] - fz
     n = ops.sqrt(dx * dx + dy * dy + dz * dz)
     ok = n >= TINY
-    dx, dy, dz = ops.select(ok, (dx, dy, dz), fallback)
-    k = length / ops.where(ok, n, 1.0)
-    return (frm[0] + dx * k, frm[1] + dy * k, frm[2] + dz * k)
+    if not ops.all(ok):
+        dx, dy, dz = ops.select(ok, (dx, dy, dz), fallback)
+        n = ops.where(ok, n, 1.0)
+    k = length / n
+    return (fx + dx * k, fy + dy * k, fz + dz * k)
 
 
-def fabrik_pass(P: list[Vec], target: Vec, root: Vec, d: list[Scalar], rest: list[Vec],
-                ops: Any) -> list[Vec]:
-    r"""One FABRIK iteration: forward reaching (:math:`p_n \leftarrow t`, then
-    :math:`p_i \leftarrow p_{i+1} + d_i\,\widehat{(p_i - p_{i+1})}`), then backward reaching
-    (:math:`p_0 \leftarrow b`, then :math:`p_{i+1} \leftarrow p_i + d_i\,\widehat{(p_{i+1} -
-    p_i)}`). ``rest`` are the initial bone directions, used where two joints coincide."""
+def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], back: list[Vec],
+                  ops: Any) -> list[Vec]:
+    r"""FABRIK's forward reaching: :math:`p_n \leftarrow t`, then
+    :math:`p_i \leftarrow p_{i+1} + d_i\,\widehat{(p_i - p_{i+1})}` down to the root.
+    ``back`` are directions from joint ``i + 1`` to ``i`` to use where two joints coincide."""
     P = list(P)
     P[-1] = target
     for i in range(len(P) - 2, -1, -1):
-        P[i] = toward(P[i + 1], P[i], d[i], scale(rest[i], -1.0), ops)
+        P[i] = toward(P[i + 1], P[i], d[i], back[i], ops)
+    return P
+
+
+def fabrik_pass(P: list[Vec], target: Vec, root: Vec, d: list[Scalar], rest: list[Vec],
+                back: list[Vec], ops: Any) -> list[Vec]:
+    r"""One FABRIK iteration: forward reaching (:func:`reach_forward`), then backward
+    reaching (:math:`p_0 \leftarrow b`, then :math:`p_{i+1} \leftarrow p_i +
+    d_i\,\widehat{(p_{i+1} - p_i)}`); ``rest`` and ``back`` are the unit bone directions
+    (root to tip and back) to use where two joints coincide."""
+    P = reach_forward(P, target, d, back, ops)
     P[0] = root
     for i in range(len(P) - 1):
         P[i + 1] = toward(P[i], P[i + 1], d[i], rest[i], ops)
     return P
 
 
+def bone_directions(P: list[Vec], ops: Any) -> tuple[list[Scalar], list[Vec]]:
+    r"""Bone lengths :math:`d_i = \lVert p_{i+1} - p_i\rVert` and unit directions of chain
+    points ``P`` (+y for a zero bone)."""
+    d, rest = [], []
+    for a, b in zip(P[:-1], P[1:], strict=True):
+        x, y, z = sub(b, a)
+        length = ops.sqrt(x * x + y * y + z * z)
+        ok = length > TINY
+        inv = 1.0 / ops.where(ok, length, 1.0)
+        d.append(length)
+        rest.append((ops.where(ok, x * inv, 0.0), ops.where(ok, y * inv, 1.0),
+                     ops.where(ok, z * inv, 0.0)))
+    return d, rest
+
+
 def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any,
-                  frames: list | None = None) -> tuple[list[Vec], Any, Any]:
+                  frames: list | None = None, errors: list | None = None
+                  ) -> tuple[list[Vec], Any, Any]:
     r"""FABRIK on chain points ``P`` (``P[0]`` fixed; bone lengths taken from them).
 
     A target beyond the reach :math:`\sum d_i` is answered in one pass, the chain stretched
-    straight at it. A batch iterates only its problems still running. ``frames``, if given,
-    receives the points after every iteration.
+    straight at it. A batch iterates only its problems still running. ``frames`` and
+    ``errors``, if given, receive the points and the effector errors after every iteration.
 
     Returns
     -------
     P : the final points
     iterations, error : per problem
     """
-    bones = [sub(b, a) for a, b in zip(P[:-1], P[1:], strict=True)]
-    d = [ops.sqrt(dot(b, b)) for b in bones]
-    rest = []
-    for (x, y, z), length in zip(bones, d, strict=True):
-        ok = length > TINY
-        inv = 1.0 / ops.where(ok, length, 1.0)
-        rest.append((ops.where(ok, x * inv, 0.0), ops.where(ok, y * inv, 1.0),
-                     ops.where(ok, z * inv, 0.0)))
+    d, rest = bone_directions(P, ops)
+    back = [scale(r, -1.0) for r in rest]
     root = P[0]
     to_t = sub(target, root)
     dist = ops.sqrt(dot(to_t, to_t))
@@ -550,7 +612,8 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any
         if not ops.any(active):
             break
         idx = np.flatnonzero(active) if ops is ARRAYS else None
-        Q, t = fabrik_pass(*ops.take((P, target, root, d, rest), idx), ops), ops.take(target, idx)
+        Q, t = fabrik_pass(*ops.take((P, target, root, d, rest, back), idx), ops), \
+            ops.take(target, idx)
         e = sub(Q[-1], t)
         err_q = ops.sqrt(dot(e, e))
         P = ops.put(P, idx, Q)
@@ -559,16 +622,18 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any
         active = ops.put(active, idx, err_q >= tol)
         if frames is not None:
             frames.append(ops.copy(P))
+        if errors is not None:
+            errors.append(ops.batch(ops.copy(err)))
     return P, its, err
 
 
-def fit_chain(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, P_new: list[Vec],
+def fit_chain(chain: SerialChain, R: list[Quat], Q: list[Quat], base: Quat, P_new: list[Vec],
               ops: Any) -> list[Quat]:
     r"""Local rotations that put a ball-joint chain on the points ``P_new`` (same bones): each
     node's global orientation turned by the shortest arc from its old bone direction to the
     new one, :math:`Q_i' = \mathrm{arc}(Q_i l_{i+1},\ p'_{i+1} - p'_i)\,Q_i` (so every bone
-    keeps its twist), then :math:`R_i' = Q_{i-1}'^{-1} Q_i'`."""
-    Q, _ = chain.forward(R, base, p0)
+    keeps its twist), then :math:`R_i' = Q_{i-1}'^{-1} Q_i'`; ``Q`` are the :math:`Q_i` of
+    ``R``."""
     R, parent = list(R), base
     for i in range(len(R) - 1):
         turn = arc_turn(qrot(Q[i], chain.bones[i + 1]), sub(P_new[i + 1], P_new[i]), ops)
@@ -583,16 +648,20 @@ def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target:
     """FABRIK on a chain of free ball joints: iterate on positions alone (:func:`fabrik_points`),
     then fit the rotations once (:func:`fit_chain`; exact, the points keep the bones).
     ``record`` fits every iteration's points too."""
-    _, P = chain.forward(R, base, p0)
+    Q, P = chain.forward(R, base, p0)
     e = sub(target, P[-1])
     history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
     points: list | None = [] if record else None
-    P_new, its, _ = fabrik_points(ops.copy(P), target, tol, max_iter, ops, points)
+    errors: list = []
+    P_new, its, _ = fabrik_points(ops.copy(P), target, tol, max_iter, ops, points, errors)
     if record and len(points) < np.max(its):  # a stretch: answered before the loop
         points.append(P_new)
-    frames = [R] + [fit_chain(chain, R, base, p0, f, ops) for f in (points if record else [P_new])]
+    frames = [R] + [fit_chain(chain, R, Q, base, f, ops) for f in (points if record else [P_new])]
     R_new = frames[-1]
-    # Residuals of the fitted poses (honest: what the returned rotations reach).
+    # Residuals of the fitted poses (honest: what the returned rotations reach); without a
+    # record, the points' errors stand for the iterations in between (the fit is exact).
+    if not record:
+        history.residuals += errors[:-1]
     for f in frames[1:] if record else frames[-1:]:
         e = sub(target, chain.forward(f, base, p0)[1][-1])
         history.residuals.append(ops.batch(ops.sqrt(dot(e, e))))
@@ -601,3 +670,85 @@ def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target:
     if not record:
         frames = []
     return R_new, history, frames
+
+
+def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec,
+                        tol: float, max_iter: int, limits: list[tuple], record: bool,
+                        ops: Any) -> tuple[list[Quat], History, list]:
+    r"""FABRIK with joint constraints (hinges, limits): forward reaching on the points
+    (:func:`reach_forward`), then the backward pass in joint space, root to tip: with the
+    parent placed (:math:`Q_{i-1}`, :math:`p_i` by forward kinematics) joint ``i`` turns its
+    bone :math:`Q_{i-1}R_i l_{i+1}` towards the reached point :math:`p'_{i+1}` (:func:`aim`:
+    a hinge about its axis, in its plane) and is projected into its limit. Every iteration
+    ends on a real pose, so its residual is honest. On a planar chain of parallel hinges
+    (the lecture's 2D arm) every turn is exact and this is plain FABRIK in the plane.
+    """
+    n = len(chain.bones)
+    axis_of = dict(zip(chain.variables, chain.axes, strict=True))
+    limits_of = {v: [lim for lim in limits if lim[0] == v] for v in chain.variables}
+    _, P = chain.forward(R, base, p0)
+    d, rest = bone_directions(P, ops)
+    back = [scale(r, -1.0) for r in rest]
+    e = sub(target, P[-1])
+    history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
+    frames = [R] if record else []
+    while history.active.any() and chain.variables:
+        reached = reach_forward(P, target, d, back, ops)
+        new, q, p, P_new = list(R), base, p0, []
+        for i in range(n):  # backward reaching: forward kinematics, aiming every joint
+            if i:
+                p = add(p, qrot(q, chain.bones[i]))
+            P_new.append(p)
+            if i in axis_of:
+                u = qrot(qmul(q, new[i]), chain.bones[i + 1])
+                new[i] = aim(new[i], q, axis_of[i], u, sub(reached[i + 1], p), ops)
+                new = chain.project(new, limits_of[i], ops)
+            q = qmul(q, new[i])
+        e_new = sub(target, P_new[-1])
+        run = ops.flag(history.active)
+        R, P, e = ops.select(run, (new, P_new, e_new), (R, P, e))
+        history.update(ops.batch(ops.sqrt(dot(e, e))))
+        if record:
+            frames.append(R)
+    return R, history, frames
+
+
+# --------------------------------------------------------------------------- CCD
+def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
+              max_iter: int, *, tip_to_root: bool, max_angle: float | None,
+              limits: list[tuple], record: bool, ops: Any) -> tuple[list[Quat], History, list]:
+    r"""CCD sweeps, as :func:`course.ik.ccd.solve_problem` on the general model: every joint
+    in turn (tip to root, or root to tip) turns the effector direction :math:`e - r_i` towards
+    :math:`t - r_i` (:func:`aim`), is projected into its limit, and the chain below it turns
+    with it: :math:`p_j \leftarrow r_i + q\,(p_j - r_i)`, :math:`Q_j \leftarrow q\,Q_j` with
+    the world turn :math:`q = Q_i' Q_i^{-1}`.
+    """
+    n = len(chain.bones)
+    axis_of = dict(zip(chain.variables, chain.axes, strict=True))
+    limits_of = {v: [lim for lim in limits if lim[0] == v] for v in chain.variables}
+    order = chain.variables[::-1] if tip_to_root else chain.variables
+    Q, P = chain.forward(R, base, p0)
+    e = sub(target, P[-1])
+    history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
+    frames = [R] if record else []
+    while history.active.any() and chain.variables:
+        new, Q, P = list(R), list(Q), list(P)
+        for v in order:
+            parent, pivot = (Q[v - 1] if v else base), P[v]
+            new[v] = aim(new[v], parent, axis_of[v], sub(P[-1], pivot), sub(target, pivot),
+                         ops, max_angle)
+            new = chain.project(new, limits_of[v], ops)
+            Qv = qmul(parent, new[v])
+            turn = qmul(Qv, qconj(Q[v]))
+            # Tip to root, the joints still to visit lie above v: only the effector matters.
+            for j in range(n - 1, n) if tip_to_root else range(v + 1, n):
+                P[j] = add(pivot, qrot(turn, sub(P[j], pivot)))
+                Q[j] = qmul(turn, Q[j])
+            Q[v] = Qv
+        R = ops.select(ops.flag(history.active), new, R)
+        Q, P = chain.forward(R, base, p0)
+        e = sub(target, P[-1])
+        history.update(ops.batch(ops.sqrt(dot(e, e))))
+        if record:
+            frames.append(R)
+    return R, history, frames

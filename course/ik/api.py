@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Mapping
 from functools import lru_cache
 from typing import Any
@@ -11,7 +12,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import ccd, fabrik, jacobian
 from ._chains import ChainModel, Problem, build_model, unreachable_targets
-from ._serial import ARRAYS, FLOATS, SerialChain, serial_chain, solve_fabrik, solve_jacobian
+from ._serial import (
+    ARRAYS,
+    FLOATS,
+    SerialChain,
+    serial_chain,
+    solve_ccd,
+    solve_fabrik,
+    solve_fabrik_joints,
+    solve_jacobian,
+)
 from .result import History, IKResult, Target
 from .two_link import two_link
 
@@ -148,9 +158,7 @@ def solve(
     hinge_limits, ball_limit = _limits(skeleton, model, limits)
     limited = bool(limits)
     max_iter = DEFAULT_MAX_ITER[method] if max_iter is None else int(max_iter)
-    if _FAST_PATH and serial is not None and (
-            method in jacobian.METHODS or (method == "fabrik" and serial.free_balls and not (
-                np.isfinite(ball_limit).any()))):
+    if _FAST_PATH and serial is not None and method != "two_link":
         (j,) = pos_t
         local_out, root_out, positions, history, frames = _solve_serial(
             skeleton, serial, model, local, root_pos, k, pos_t[j], B, batched, method, tol,
@@ -253,10 +261,26 @@ def _cached_model(parents: tuple, offsets: bytes, kinds: tuple, root: int, eff: 
     return model, serial_chain(model)
 
 
+# Per skeleton object (read-only: its offsets cannot be written), the models of the paths
+# solved on it: a slider calls ``solve`` with the same skeleton over and over.
+_MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _model(skeleton: Any, root: int, eff: tuple,
            reff: tuple) -> tuple[ChainModel, SerialChain | None]:
-    """The (cached) model, and its serial chain if it is one: a slider calls ``solve`` with the
-    same skeleton over and over."""
+    """The (cached) model, and its serial chain if it is one."""
+    try:
+        per_skeleton = _MODELS.setdefault(skeleton, {})
+    except TypeError:  # not weakly referenceable: look up by value only
+        per_skeleton = {}
+    key = (root, eff, reff)
+    if key not in per_skeleton:
+        per_skeleton[key] = _model_by_value(skeleton, root, eff, reff)
+    return per_skeleton[key]
+
+
+def _model_by_value(skeleton: Any, root: int, eff: tuple,
+                    reff: tuple) -> tuple[ChainModel, SerialChain | None]:
     kinds = []
     for t in skeleton.joint_types:
         axis = getattr(t, "axis", None)
@@ -346,11 +370,13 @@ def _solve_serial(
     skeleton: Any, chain: SerialChain, model: ChainModel, local: Array, root_pos: Array, k: int,
     target: Array, B: int, batched: bool, method: str, tol: float, max_iter: int,
     col_weight: Array, limits: list[tuple], record: bool, damping: float | None = None,
-    rcond: float = 1e-6, max_step: float = 0.5,
+    rcond: float = 1e-6, max_step: float = 0.5, tip_to_root: bool = True,
+    max_angle: float | None = None,
 ) -> tuple[Array, Array, Array, History, list[tuple[Array, Array]] | None]:
-    """A Jacobian method or FABRIK on a serial chain (:mod:`course.ik._serial`), one problem
-    in Python floats or a batch on component arrays. Returns local rotations, root position and
-    positions, all (B, ...), the history and the recorded (local, positions) frames."""
+    """CCD, FABRIK or a Jacobian method on a serial chain (:mod:`course.ik._serial`), one
+    problem in Python floats or a batch on component arrays. Returns local rotations, root
+    position and positions, all (B, ...), the history and the recorded (local, positions)
+    frames."""
     from course import fk
 
     ops = ARRAYS if batched else FLOATS
@@ -369,8 +395,15 @@ def _solve_serial(
     if limits:
         R = chain.project(R, limits, ops)
     target = _components(np.broadcast_to(target, (B, 3)), ops)
-    if method == "fabrik":
+    if method == "fabrik" and chain.free_balls and not limits:  # positions alone suffice
         R, history, frames = solve_fabrik(chain, R, base, p0, target, tol, max_iter, record, ops)
+    elif method == "fabrik":
+        R, history, frames = solve_fabrik_joints(chain, R, base, p0, target, tol, max_iter,
+                                                 limits, record, ops)
+    elif method == "ccd":
+        R, history, frames = solve_ccd(chain, R, base, p0, target, tol, max_iter,
+                                       tip_to_root=tip_to_root, max_angle=max_angle,
+                                       limits=limits, record=record, ops=ops)
     else:
         if damping is None:
             damping = 0.05 * max(float(model.reach_far.max()), 1e-9)

@@ -95,14 +95,16 @@ def fabrik_batch(
                             == 2 else positions, targets, tol, max_iter)
 
 
-def _fabrik_chain(P: Array, t: Array, tol: float, max_iter: int) -> tuple[Array, Array]:
-    """In-place FABRIK on (B, n, 3) chains; returns iterations and errors, both (B,).
+def _fabrik_chain(P: Array, t: Array, tol: float, max_iter: int,
+                  errors: list | None = None) -> tuple[Array, Array]:
+    """In-place FABRIK on (B, n, 3) chains; returns iterations and errors, both (B,);
+    ``errors``, if given, receives the (B,) errors after every iteration.
 
     Runs :func:`course.ik._serial.fabrik_points` on component-major storage (each coordinate
     of each joint one contiguous (B,) row)."""
     comps = np.array(P.transpose(1, 2, 0))  # (n, 3, B), a copy the solver may write into
-    points, its, err = fabrik_points([tuple(c) for c in comps],
-                                     tuple(np.array(t.T)), tol, max_iter, ARRAYS)
+    points, its, err = fabrik_points([tuple(c) for c in comps], tuple(np.array(t.T)), tol,
+                                     max_iter, ARRAYS, errors=errors)
     P[:] = np.moveaxis(np.array(points), -1, 0)
     return its, err
 
@@ -129,11 +131,13 @@ def solve_problem(
             and len(m.effectors) == 1 and m.effectors[0] == m.n_nodes - 1 and not record)
     err = norm(problem.target_pos - p[:, m.effectors]).max(axis=1)
     if free:
-        P = p.copy()
-        its, err = _fabrik_chain(P, problem.target_pos[:, 0], tol, max_iter)
+        P, errors = p.copy(), []
+        its, err = _fabrik_chain(P, problem.target_pos[:, 0], tol, max_iter, errors)
         Rn = problem.fit_free(Rn, P)
         history = History(norm(problem.target_pos - p[:, m.effectors]).max(axis=1), tol, max_iter)
         history.iterations = its
+        # The points' errors stand for the iterations; the last is that of the fitted pose.
+        history.residuals += errors[:-1]
         history.residuals.append(problem.error(*problem.forward(Rn))[1])
         history.active[:] = False
         return Rn, history, []
