@@ -43,7 +43,7 @@ from .motion import (
     rotation_axes,
 )
 from .rotations import euler_from_quat, quat_from_euler, quat_identity
-from .skeleton import Skeleton
+from .skeleton import Ball, Fixed, Skeleton
 
 Array = NDArray[np.float64]
 
@@ -146,7 +146,9 @@ def parse_bvh(text: str, source: str = "<string>", name: str = "") -> Motion:
     n_channels = sum(len(c) for c in channels)
     values = _parse_frames(lines, data_at, n_frames, n_channels, source)
     offsets = np.array([j.offset for j in joints], dtype=np.float64)
-    skeleton = Skeleton([j.name for j in joints], [j.parent for j in joints], offsets)
+    # A joint rotates (3 DoF) when it has rotation channels; End Sites have none.
+    types = [Ball() if set(j.channels) & set(ROTATION_CHANNELS) else Fixed() for j in joints]
+    skeleton = Skeleton([j.name for j in joints], [j.parent for j in joints], offsets, types)
     rotations, root_positions, translations = _pose_from_channels(values, channels, offsets)
     return Motion(
         skeleton=skeleton,

@@ -107,6 +107,9 @@ def test_real_files_load(shared_bvh_dir, name):
     end_sites = [n for n, c in zip(motion.skeleton.names, motion.channels, strict=True) if not c]
     assert len(end_sites) == n_end_sites and all(n.endswith("_end") for n in end_sites)
     assert sum(len(c) for c in motion.channels) == n_channels
+    # one rotational degree of freedom per rotation channel: End Sites are fixed joints
+    rotation_channels = sum(c.endswith("rotation") for cs in motion.channels for c in cs)
+    assert motion.skeleton.dof == rotation_channels
     assert motion.n_frames == n_frames
     assert motion.frame_time == pytest.approx(frame_time)
     assert motion.local_rotations.shape == (n_frames, n_joints, 4)

@@ -148,3 +148,17 @@ def test_full_body_ik_reaches_the_moved_target(sample_motion):
             fb.positions[j] - fb.targets[name])
     finally:
         fb.close()
+
+
+def test_full_body_ik_pulls_an_inner_joint(sample_motion):
+    """Not only tips: the hand (not the hand's End Site) can be an effector, rooted at a foot."""
+    fb = controls.full_body_ik(sample_motion, 10, root="LeftFoot", effectors=["LeftHand"])
+    try:
+        fb.sliders["x"].value = fb.sliders["x"].value + 2.0
+        j, foot = fb.skeleton.index("LeftHand"), fb.skeleton.index("LeftFoot")
+        drawn = fb.scene.skeleton("IK").positions
+        assert fb.result.converged, fb.readout.value
+        assert np.linalg.norm(drawn[j] - fb.targets["LeftHand"]) < 1e-3
+        np.testing.assert_allclose(drawn[foot], fb.positions[foot], atol=1e-9)
+    finally:
+        fb.close()

@@ -571,8 +571,10 @@ class FullBodyIK(Control):
         methods = _ik_methods()
         self.sliders = {
             "root": widgets.Dropdown(options=names, value=root or names[0], description="root"),
-            "effectors": widgets.SelectMultiple(options=leaves, value=tuple(effectors),
-                                                description="effectors", rows=6),
+            # any joint can be pulled (a hand, an elbow); the tips are offered first
+            "effectors": widgets.SelectMultiple(
+                options=leaves + [n for n in names if n not in leaves],
+                value=tuple(effectors), description="effectors", rows=6),
             "edit": widgets.Dropdown(options=list(effectors), description="edit target"),
             "method": widgets.Dropdown(options=list(methods),
                                        value=method or ("dls" if "dls" in methods else methods[0]),
