@@ -278,7 +278,7 @@ class FKExplorer(Control):
             self.local_rotations, self.root_position)
         # frame the whole reach (the pose can turn anywhere), not just this pose
         reach = float(np.linalg.norm(self.positions - self.positions[0], axis=1).max())
-        corners = self.positions[0] + reach * np.array([[1, 1, 1], [-1, -1, -1]])
+        corners = _reach_points(self.positions[0], reach)
         self.scene = SkeletonScene(window_size=(640, 520))
         self.scene.add_skeleton(skeleton.parents, self.positions, self.orientations,
                                 name="pose", axes=axes,
@@ -416,6 +416,11 @@ def _ik_methods() -> tuple[str, ...]:
     return tuple(getattr(course.ik, "METHODS", IK_METHODS))
 
 
+def _reach_points(center: Array, reach: float) -> Array:
+    """The six extremes of the sphere a chain can sweep: what a view of it must cover."""
+    return center + reach * np.concatenate([np.eye(3), -np.eye(3)])
+
+
 class IKPlayground(Control):
     """Drag a target, pick a method, and watch IK solve it; an iteration slider replays the
     recorded solve, and the residual and iteration count update live.
@@ -462,7 +467,7 @@ class IKPlayground(Control):
         }
         self.readout = widgets.HTML()
         self.scene = SkeletonScene(window_size=(640, 500))
-        frame = np.concatenate([start_pos, center + reach * np.array([[1, 1, 1], [-1, -1, -1]])])
+        frame = np.concatenate([start_pos, _reach_points(center, reach)])
         self.scene.add_skeleton(skeleton.parents, start_pos, name="start", color=(
             "#c3cad3", "#9aa5b1"), opacity=0.55, frame_points=frame[None])
         self.scene.add_skeleton(skeleton.parents, start_pos, name="solution")

@@ -234,7 +234,7 @@ class SkeletonScene:
         bone_color, joint_color = color or PALETTE[len(self.skeletons) % len(PALETTE)]
         if not self.skeletons:
             self._frame(pos if frame_points is None else np.asarray(frame_points, np.float64),
-                        pos, par)
+                        pos, par, headroom=frame_points is None)
         s = self._scale
         points = pv.PolyData(pos.copy())
         bones = pv.PolyData()
@@ -269,14 +269,18 @@ class SkeletonScene:
         self._update_legend()
         return skel
 
-    def _frame(self, points: Array, pose: Array, parents: NDArray[np.intp]) -> None:
-        """Size the glyphs from ``pose``; place the floor and camera to cover ``points``."""
+    def _frame(self, points: Array, pose: Array, parents: NDArray[np.intp],
+               headroom: bool) -> None:
+        """Size the glyphs from ``pose``; place the floor and camera to cover ``points``
+        (with ``headroom``, also a pose whose limbs swing out further)."""
         pts = points.reshape(-1, 3)
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         bone = np.linalg.norm(pose[1:] - pose[parents[1:]], axis=1)
         self._scale = float(max(np.ptp(pose, axis=0).max(), 2.5 * bone.max(initial=0.0), 1e-6))
         self._center = (lo + hi) / 2
-        self._radius = float(max(np.linalg.norm(hi - lo) / 2, 0.5 * self._scale))
+        # the bounding sphere about the box centre: a sphere of reach is framed as a sphere
+        self._radius = float(max(np.linalg.norm(pts - self._center, axis=1).max(),
+                                 (0.65 if headroom else 0.5) * self._scale))
         if self._ground_wanted:
             self._add_ground(lo, hi)
         self.set_camera(self._camera)
