@@ -21,8 +21,9 @@ import io
 import os
 import sys
 import threading
+import traceback
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -92,27 +93,69 @@ def off_screen() -> bool:
 
 
 T = TypeVar("T")
-_gl_thread: ThreadPoolExecutor | None = None
-_gl_lock = threading.Lock()
+
+
+def _kernel_loop() -> Any:
+    """The kernel's main-thread event loop (a tornado ``IOLoop``), or None outside a kernel."""
+    ipython = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None else None
+    return getattr(getattr(shell, "kernel", None), "io_loop", None)
 
 
 def on_gl_thread(fn: Callable[..., T], *args: Any) -> T:
-    """Run ``fn(*args)`` on the one thread that owns VTK's OpenGL contexts, and wait for it.
+    """Run ``fn(*args)`` on the thread that owns VTK's OpenGL contexts, and wait for it.
 
-    In JupyterLab 4.6 with ipykernel 7, widget events arrive on a *subshell* thread while cells
-    run on the main thread; an OpenGL (EGL) context is bound to one thread, and rendering from
-    another crashes the kernel. So, inside a kernel, every render goes through one worker
-    thread; elsewhere (scripts, tests) ``fn`` runs directly.
+    An OpenGL (EGL) context is bound to one thread, and rendering from another crashes the
+    kernel. In a kernel that thread is the main one: cells run there, and so does the trame
+    server that renders the interactive view. But JupyterLab 4.6 with ipykernel 7 delivers
+    widget events on a *subshell* thread, so a render asked for there is handed to the main
+    thread's event loop. Elsewhere (scripts, tests) ``fn`` runs directly.
     """
-    global _gl_thread
-    if not in_jupyter_kernel():
+    loop = None if threading.current_thread() is threading.main_thread() else _kernel_loop()
+    if loop is None:
         return fn(*args)
-    with _gl_lock:
-        if _gl_thread is None:
-            _gl_thread = ThreadPoolExecutor(1, thread_name_prefix="course-viz-gl")
-    if threading.current_thread().name.startswith("course-viz-gl"):
-        return fn(*args)
-    return _gl_thread.submit(fn, *args).result()
+    future: Future[T] = Future()
+
+    def run() -> None:
+        try:
+            future.set_result(fn(*args))
+        except BaseException as exc:  # handed to the waiting thread, which re-raises it
+            future.set_exception(exc)
+
+    loop.add_callback(run)
+    return future.result()
+
+
+def latest_on_gl_thread(handler: Callable[[T], None]) -> Callable[[T], None]:
+    """Wrap a widget observer so that it runs on the GL thread (see :func:`on_gl_thread`).
+
+    Called on the main thread, ``handler`` runs at once. Called from a subshell thread, it is
+    queued on the main loop without waiting, and an event that arrives while one is still
+    queued replaces it: a fast drag renders its latest value, never a backlog of stale ones.
+    """
+    pending: list[T] = []
+    lock = threading.Lock()
+
+    def run() -> None:
+        with lock:
+            change = pending.pop()
+        try:
+            handler(change)
+        except Exception:  # nobody waits for this call: report instead of losing the error
+            traceback.print_exc()
+
+    def observer(change: T) -> None:
+        loop = None if threading.current_thread() is threading.main_thread() else _kernel_loop()
+        if loop is None:
+            handler(change)
+            return
+        with lock:
+            queued = bool(pending)
+            pending[:] = [change]
+        if not queued:
+            loop.add_callback(run)
+
+    return observer
 
 
 def png_bytes(image: np.ndarray, compress_level: int = 1) -> bytes:

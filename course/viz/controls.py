@@ -17,6 +17,7 @@ import ipywidgets as widgets
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._backend import latest_on_gl_thread
 from .figures import GimbalFigure, convergence_plot, figure_png, slerp_arc_figure
 from .scene import FrameScene, SkeletonScene
 
@@ -33,6 +34,11 @@ def _angle_slider(description: str, value: float = 0.0, limit: float = 180.0
     """A slider in degrees (what students read); the math converts to radians."""
     return widgets.FloatSlider(value=value, min=-limit, max=limit, step=1.0,
                                description=description, **_slider_style())
+
+
+def _on_value(widget: widgets.Widget, handler: Any) -> None:
+    """Call ``handler(change)`` when ``widget.value`` changes, on the thread that renders."""
+    widget.observe(latest_on_gl_thread(handler), names="value")
 
 
 def _matrix_html(R: Array) -> str:
@@ -101,7 +107,7 @@ class RotationExplorer(Control):
         controls = widgets.VBox([self.order, *self.sliders.values(), self.warning, self.readout])
         self.widget = widgets.HBox([controls, self.scene.widget(), self.gimbal_image])
         for w in (self.order, *self.sliders.values()):
-            w.observe(self._changed, names="value")
+            _on_value(w, self._changed)
         self._changed()
 
     @property
@@ -173,7 +179,7 @@ class SlerpExplorer(Control):
         left = widgets.VBox([*self.sliders.values(), self.readout])
         self.widget = widgets.VBox([self.scene.widget(), widgets.HBox([left, self.arc_image])])
         for name, s in self.sliders.items():
-            s.observe(self._changed_t if name == "t" else self._changed_ends, names="value")
+            _on_value(s, self._changed_t if name == "t" else self._changed_ends)
         self._changed_ends()
 
     def _changed_ends(self, _change: Any = None) -> None:
@@ -264,7 +270,7 @@ class FKExplorer(Control):
             for k, a in enumerate(ax):
                 label = "xyz"[int(np.argmax(np.abs(a)))] if np.count_nonzero(a) == 1 else f"a{k}"
                 s = _angle_slider(label, 0.0, limit)
-                s.observe(lambda _c, j=j: self._changed(j), names="value")
+                _on_value(s, lambda _c, j=j: self._changed(j))
                 self.sliders[f"{skeleton.names[j]}.{k}"] = s
                 row.append(s)
             groups.append(widgets.VBox(row))
@@ -272,7 +278,7 @@ class FKExplorer(Control):
         self.accordion = widgets.Accordion(children=groups, titles=tuple(titles),
                                            selected_index=0 if groups else None)
         self.reset_button = widgets.Button(description="reset", icon="undo")
-        self.reset_button.on_click(lambda _b: self.reset())
+        self.reset_button.on_click(latest_on_gl_thread(lambda _b: self.reset()))
         self.readout = widgets.HTML()
         self.positions, self.orientations = skeleton.forward_kinematics(
             self.local_rotations, self.root_position)
@@ -375,10 +381,9 @@ class BVHPlayer(Control):
         self.scene.add_skeleton(motion.skeleton.parents, self.positions[0], name=motion.name
                                 or "motion", frame_points=self.positions)
         self.scene.set_camera(camera)
-        self.sliders["frame"].observe(lambda c: self.show_frame(c["new"]), names="value")
-        self.sliders["speed"].observe(lambda _c: self._set_speed(), names="value")
-        self.sliders["camera"].observe(lambda c: self.scene.set_camera(c["new"], render=True),
-                                       names="value")
+        _on_value(self.sliders["frame"], lambda c: self.show_frame(c["new"]))
+        _on_value(self.sliders["speed"], lambda _c: self._set_speed())
+        _on_value(self.sliders["camera"], lambda c: self.scene.set_camera(c["new"], render=True))
         self._set_speed()
         row = widgets.HBox([self.play, self.sliders["frame"], self.sliders["speed"],
                             self.sliders["loop"], self.sliders["camera"]])
@@ -476,8 +481,8 @@ class IKPlayground(Control):
         self._convergence: Any = None
         self._solving = False
         for name in ("x", "y", "z", "method", "tol", "max_iter"):
-            self.sliders[name].observe(lambda _c: self.solve(), names="value")
-        self.sliders["iteration"].observe(lambda c: self.show_iteration(c["new"]), names="value")
+            _on_value(self.sliders[name], lambda _c: self.solve())
+        _on_value(self.sliders["iteration"], lambda c: self.show_iteration(c["new"]))
         left = widgets.VBox([*self.sliders.values(), self.readout, self.convergence_image])
         self.widget = widgets.HBox([left, self.scene.widget()])
         self.solve()
@@ -594,12 +599,12 @@ class FullBodyIK(Control):
                                 color=("#c3cad3", "#9aa5b1"), opacity=0.6)
         self.scene.add_skeleton(sk.parents, self.positions, name="IK")
         self._editing = False
-        self.sliders["effectors"].observe(lambda _c: self._effectors_changed(), names="value")
-        self.sliders["edit"].observe(lambda _c: self._load_target(), names="value")
+        _on_value(self.sliders["effectors"], lambda _c: self._effectors_changed())
+        _on_value(self.sliders["edit"], lambda _c: self._load_target())
         for k in ("root", "method"):
-            self.sliders[k].observe(lambda _c: self.solve(), names="value")
+            _on_value(self.sliders[k], lambda _c: self.solve())
         for c in "xyz":
-            self.sliders[c].observe(lambda _c: self._target_moved(), names="value")
+            _on_value(self.sliders[c], lambda _c: self._target_moved())
         self.widget = widgets.HBox([widgets.VBox([*self.sliders.values(), self.readout]),
                                     self.scene.widget()])
         self._load_target()

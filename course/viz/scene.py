@@ -13,6 +13,8 @@ a BVH frame. y is up.
 
 from __future__ import annotations
 
+import contextlib
+import io
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -540,11 +542,24 @@ class SkeletonScene:
                 self._widget = widgets.Image(format="png", width=w, height=h)
                 self.render()
             else:
-                self.plotter.render()
-                self._widget = self.plotter.show(
-                    jupyter_backend=self.backend, return_viewer=True, auto_close=False
-                )
+                self._widget = on_gl_thread(self._trame_view)
         return self._widget
+
+    def _trame_view(self) -> Any:
+        """The interactive view; trame-vtklocal's note of where it found its (unused) wasm
+        bundle is kept out of the student's output."""
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            self.plotter.render()
+            view = self.plotter.show(
+                jupyter_backend=self.backend, return_viewer=True, auto_close=False
+            )
+        print("".join(line for line in out.getvalue().splitlines(keepends=True)
+                      if not line.startswith("Using wasm_dir:")), end="")
+        # the iframe is as wide as its box, which in a control's HBox would shrink to nothing
+        view.layout.width = f"{self.plotter.window_size[0]}px"
+        view.layout.flex = "0 0 auto"
+        return view
 
     def show(self) -> None:
         """Display the view: in a notebook as :meth:`widget`, else in a window (blocking)."""
@@ -657,5 +672,6 @@ class FrameScene:
     _capture = SkeletonScene._capture
     project = SkeletonScene.project
     widget = SkeletonScene.widget
+    _trame_view = SkeletonScene._trame_view
     show = SkeletonScene.show
     close = SkeletonScene.close

@@ -1,5 +1,7 @@
 """JupyterLab in headless Chromium: run the notebook, drag a slider, see the numbers and the
-3D view change. Screenshots go to test-artifacts/. Needs the Debian package `chromium`."""
+3D view change, and the kernel stay alive: once with the static image view that CI executes,
+once with the interactive trame view a student gets by default. Screenshots go to
+test-artifacts/. Needs the Debian package `chromium`."""
 
 from __future__ import annotations
 
@@ -39,15 +41,17 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-@pytest.fixture(scope="module")
-def lab(tmp_path_factory):
-    """JupyterLab on a free localhost port, serving a copy of the notebook (never saved back)."""
+@pytest.fixture(scope="module", params=["static", "trame"])
+def lab(request, tmp_path_factory):
+    """JupyterLab on a free localhost port, serving a copy of the notebook (never saved back),
+    with the 3D view as an image widget (``static``, what CI executes) or the interactive
+    ``trame`` view a student gets by default."""
     root = tmp_path_factory.mktemp("lab")
     shutil.copy(NOTEBOOK, root / NOTEBOOK.name)
     port = _free_port()
     env = {
         **os.environ,
-        "PYVISTA_JUPYTER_BACKEND": "static",  # the 3D view is an image widget
+        "PYVISTA_JUPYTER_BACKEND": request.param,
         "VTK_DEFAULT_OPENGL_WINDOW": "vtkEGLRenderWindow",
         "PYVISTA_OFF_SCREEN": "true",
         "JUPYTERLAB_SETTINGS_DIR": str(root / ".settings"),
@@ -71,7 +75,7 @@ def lab(tmp_path_factory):
                 if server.poll() is not None or time.monotonic() > deadline:
                     raise RuntimeError((root / "lab.log").read_text()[-3000:]) from None
                 time.sleep(0.3)
-        yield base
+        yield base, request.param
     finally:
         server.terminate()
         try:
@@ -84,6 +88,7 @@ def lab(tmp_path_factory):
 def test_slider_moves_the_skeleton_in_jupyterlab(lab):
     from playwright.sync_api import sync_playwright
 
+    base, backend = lab
     ARTIFACTS.mkdir(exist_ok=True)
     with sync_playwright() as p:
         browser = p.chromium.launch(
@@ -92,23 +97,23 @@ def test_slider_moves_the_skeleton_in_jupyterlab(lab):
         )
         page = browser.new_page(viewport={"width": 1400, "height": 1000})
         try:
-            page.goto(f"{lab}/lab/tree/{NOTEBOOK.name}?reset&token={TOKEN}")
+            page.goto(f"{base}/lab/tree/{NOTEBOOK.name}?reset&token={TOKEN}")
             page.wait_for_function("window.jupyterapp && document.querySelector('.jp-Notebook')",
                                    timeout=60_000)
             page.wait_for_function(KERNEL_IDLE, timeout=60_000)
             page.evaluate(RUN_ALL)
-            image = page.locator(".widget-image").first
-            image.wait_for(state="visible", timeout=60_000)
+            view = page.locator(".widget-image" if backend == "static" else "iframe").first
+            view.wait_for(state="visible", timeout=60_000)
             readout = page.locator(".widget-html-content").filter(has_text="p").last
             page.wait_for_function(
                 "[...document.querySelectorAll('.widget-html-content')]"
                 ".some(e => e.textContent.includes('p'))", timeout=30_000)
             widget_area = page.locator(".jp-OutputArea-output").last
             widget_area.scroll_into_view_if_needed()
-            page.wait_for_timeout(500)
+            page.wait_for_timeout(500 if backend == "static" else 6000)
             text_before = readout.inner_text()
-            image_before = image.screenshot(path=str(ARTIFACTS / "e2e_view_before.png"))
-            widget_area.screenshot(path=str(ARTIFACTS / "e2e_widget_before.png"))
+            image_before = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_before.png"))
+            widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_before.png"))
 
             handle = page.locator(".widget-slider .noUi-handle").first
             handle.scroll_into_view_if_needed()
@@ -122,15 +127,17 @@ def test_slider_moves_the_skeleton_in_jupyterlab(lab):
             page.wait_for_function(
                 "([t]) => ![...document.querySelectorAll('.widget-html-content')]"
                 ".some(e => e.innerText === t)", arg=[text_before], timeout=20_000)
-            page.wait_for_timeout(800)  # the last image of the drag
+            page.wait_for_timeout(800 if backend == "static" else 4000)  # the last frame
             widget_area.scroll_into_view_if_needed()
             text_after = readout.inner_text()
-            image_after = image.screenshot(path=str(ARTIFACTS / "e2e_view_after.png"))
-            widget_area.screenshot(path=str(ARTIFACTS / "e2e_widget_after.png"))
+            image_after = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_after.png"))
+            widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_after.png"))
+            alive = page.evaluate(KERNEL_IDLE.replace(" === 'idle'", " !== 'dead'"))
         except Exception:
-            page.screenshot(path=str(ARTIFACTS / "e2e_failure.png"), full_page=True)
+            page.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_failure.png"), full_page=True)
             raise
         finally:
             browser.close()
+    assert alive, "the kernel died while the slider moved"
     assert text_after != text_before
     assert image_after != image_before, "the 3D view did not change"
