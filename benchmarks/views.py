@@ -43,19 +43,31 @@ def _row(name: str, fast: float, slow: float | None = None) -> None:
 
 def main() -> None:
     from course import data
+    from course.rotations import quat_from_euler
     from course.skeleton import chain
     from course.viz import controls
-    from course.viz.figures import ChainPlot
-    from course.viz.scene import SkeletonScene
+    from course.viz.figures import (
+        ChainPlot,
+        GimbalFigure,
+        convergence_plot,
+        figure_png,
+        slerp_arc_figure,
+    )
+    from course.viz.scene import FrameScene, SkeletonScene
 
     motion = data.load("cmu_12_01_walk")
     sk = motion.skeleton
     arm = chain([1.0] * 7, axes=[0, 0, 1])
     rng = np.random.default_rng(0)
 
-    def rebuild(parents, pose) -> None:  # the naive way: a new scene per event
-        scene = SkeletonScene(window_size=(640, 520))
+    def rebuild(parents, pose, size=(640, 520)) -> None:  # the naive way: a new scene per event
+        scene = SkeletonScene(window_size=size)
         scene.add_skeleton(parents, pose)
+        scene.screenshot()
+        scene.close()
+
+    def rebuild_frames(n: int, size) -> None:
+        scene = FrameScene(n, window_size=size)
         scene.screenshot()
         scene.close()
 
@@ -71,8 +83,16 @@ def main() -> None:
              _median_ms(lambda i, m=method: course.ik.solve(
                  arm, ident, np.zeros(3), {"end_effector": [3.0, 4.0 + 0.01 * i, 0.0]},
                  method=m, record=True), 20))
+    hands = {"LeftHand": None, "RightHand": None}
+    pos, _ = sk.forward_kinematics(local, root)
+    for name in hands:
+        hands[name] = pos[sk.index(name)] + [2.0, 1.0, 0.0]
+    _row("IK dls, CMU walk, two hands",
+         _median_ms(lambda i: course.ik.solve(sk, local, root, {
+             k: v + [0, 0.01 * i, 0] for k, v in hands.items()}, method="dls"), 10))
 
-    print("\nvalue change -> rendered frame (static backend: render + PNG)")
+    print("\nvalue change -> rendered frame (static backend: render + PNG),"
+          " beside rebuilding the views for the same event")
     ex = controls.fk_explorer(sk, local, root)
     slider = ex.sliders["LeftArm.0"]
     fast = _median_ms(lambda i: setattr(slider, "value", float(i % 90)))
@@ -80,24 +100,53 @@ def main() -> None:
         lambda _i: rebuild(sk.parents, ex.positions), 5))
     ex.close()
 
-    player = controls.bvh_player(motion)
+    player = controls.bvh_player(motion, curves={"hips y": motion.root_positions[:, 1] / 100})
     fast = _median_ms(lambda i: setattr(player.sliders["frame"], "value", 7 * i))
-    _row("bvh_player frame", fast, _median_ms(
-        lambda i: rebuild(sk.parents, player.positions[7 * i]), 5))
+    _row("bvh_player frame (+ curve cursor)", fast, _median_ms(
+        lambda i: rebuild(sk.parents, player.positions[7 * i], (720, 480)), 5))
     player.close()
 
     rot = controls.rotation_explorer()
     _row("rotation_explorer (frame + gimbal figure)",
-         _median_ms(lambda i: setattr(rot.sliders["angle0"], "value", float(i))))
+         _median_ms(lambda i: setattr(rot.sliders["angle0"], "value", float(i))),
+         _median_ms(lambda i: (rebuild_frames(1, (380, 340)),
+                               GimbalFigure("XYZ", (0.01 * i, 0, 0)).png()), 5))
     rot.close()
 
+    se = controls.slerp_explorer()
+    _row("slerp_explorer t (3 frames + arc marker)",
+         _median_ms(lambda i: setattr(se.sliders["t"], "value", 0.05 * (i % 20))),
+         _median_ms(lambda i: (rebuild_frames(3, (780, 330)), figure_png(
+             slerp_arc_figure(se.q0, se.q1, t=0.05 * (i % 20)))), 5))
+    _row("slerp_explorer end rotation (arc paths)",
+         _median_ms(lambda i: setattr(se.sliders["end1"], "value", 100.0 + i)),
+         _median_ms(lambda i: (rebuild_frames(3, (780, 330)), figure_png(
+             slerp_arc_figure(se.q0, quat_from_euler([0.3, 1.7 + 0.01 * i, 1.0], "XYZ")))), 5))
+    se.close()
+
     pg = controls.ik_playground(arm, methods=["ccd", "fabrik", "dls"])
+
+    def naive_ik(i: int) -> None:
+        r = course.ik.solve(arm, ident, np.zeros(3), {"joint6": pg.target}, method="dls",
+                            record=True)
+        rebuild(arm.parents, r.positions, (640, 500))
+        figure = convergence_plot({"dls": r.residuals}, tol=1e-4).figure
+        figure.canvas.draw()
+        figure_png(figure)
+
     fast = _median_ms(lambda i: setattr(pg.sliders["y"], "value", 3.0 + 0.05 * i))
-    _row("ik_playground target (dls + convergence plot)", fast, _median_ms(
-        lambda _i: rebuild(arm.parents, pg.result.positions), 5))
+    _row("ik_playground target (dls + convergence plot)", fast, _median_ms(naive_ik, 5))
     replay = _median_ms(lambda i: setattr(pg.sliders["iteration"], "value", i % len(pg.frames)))
-    _row("ik_playground iteration replay", replay)
+    _row("ik_playground iteration replay", replay, _median_ms(
+        lambda i: rebuild(arm.parents, pg.frames[i % len(pg.frames)], (640, 500)), 5))
     pg.close()
+
+    fb = controls.full_body_ik(motion, 100)
+    y0 = fb.sliders["y"].value
+    fast = _median_ms(lambda i: setattr(fb.sliders["y"], "value", y0 + 0.1 * (i % 20)))
+    _row("full_body_ik target (dls, two effectors)", fast, _median_ms(
+        lambda _i: rebuild(sk.parents, fb.result.positions), 5))
+    fb.close()
 
     print("\nmatplotlib, 30 bones")
     parents = np.concatenate([[-1], np.arange(30)])
@@ -105,8 +154,8 @@ def main() -> None:
     for dims in (2, 3):
         plot = ChainPlot(parents, pose, dims=dims)
         update = _median_ms(lambda i, p=plot: p.update(pose + 0.01 * i))
-        full = _median_ms(lambda i, p=plot: (p.update(pose + 0.01 * i), p.figure.canvas.draw()))
-        _row(f"{dims}D: update{' (blit)' if dims == 2 else ''} vs full redraw", update, full)
+        full = _median_ms(lambda i, p=plot: (p.update(pose + 0.01 * i), p.full_redraw()))
+        _row(f"{dims}D: update (blit) vs full redraw", update, full)
 
 
 if __name__ == "__main__":

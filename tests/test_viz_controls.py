@@ -16,6 +16,7 @@ import pytest  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 from course.viz import controls  # noqa: E402
+from course.viz.scene import GHOST, PALETTE  # noqa: E402
 
 
 def _same_rotation(q, ref: Rotation) -> None:
@@ -105,17 +106,42 @@ def test_bvh_player_shows_the_precomputed_frame(sample_motion):
         assert abs(shown - 2 * fps) / (2 * fps) < 0.1
         player.sliders["loop"].value = False
         assert player.play.repeat is False
+        # the root's path lies on the floor, under every frame's root
+        path = player.scene._trail.points[:sample_motion.n_frames]
+        np.testing.assert_allclose(path[:, [0, 2]], positions[:, 0, [0, 2]])
+        assert np.all(path[:, 1] <= positions[..., 1].min() + 1e-9)
     finally:
         player.close()
 
 
-def _ik_ready() -> bool:
-    import course.ik
+def test_bvh_player_curves_follow_the_frame(sample_motion):
+    n = sample_motion.n_frames
+    curves = {"root height": sample_motion.root_positions[:, 1] / 100, "zero": np.zeros(n)}
+    player = controls.bvh_player(sample_motion, curves=curves)
+    try:
+        before = player.curves_image.value
+        player.sliders["frame"].value = n // 2
+        t = (n // 2) * sample_motion.frame_time
+        np.testing.assert_allclose(player.curves.cursor.get_xdata(), [t, t])
+        assert player.curves_image.value != before and player.curves_image.value[:4] == b"\x89PNG"
+    finally:
+        player.close()
 
-    return hasattr(course.ik, "solve")
+
+@pytest.mark.parametrize("camera", ["front", "side", "top", "iso"])
+def test_bvh_player_keeps_every_frame_in_view(sample_motion, camera):
+    player = controls.bvh_player(sample_motion, camera=camera)
+    try:
+        w, h = player.scene.plotter.window_size
+        uv = player.scene.project(player.positions.reshape(-1, 3))
+        assert uv[:, 0].min() >= 0 and uv[:, 0].max() <= w
+        assert uv[:, 1].min() >= 0 and uv[:, 1].max() <= h
+        # and the clip fills the view along one side at least (not a speck in the middle)
+        assert max(np.ptp(uv[:, 0]) / w, np.ptp(uv[:, 1]) / h) > 0.5
+    finally:
+        player.close()
 
 
-@pytest.mark.skipif(not _ik_ready(), reason="course.ik.solve is not written yet")
 def test_ik_playground_solves_and_replays():
     from course.skeleton import chain
 
@@ -132,11 +158,49 @@ def test_ik_playground_solves_and_replays():
         pg.sliders["iteration"].value = 0
         np.testing.assert_allclose(pg.scene.skeleton("solution").positions, pg.frames[0])
         assert "iteration 0" in pg.readout.value
+        # the solution is drawn in colour, the start pose as a grey ghost
+        assert pg.scene.skeleton("solution").bone_color == PALETTE[0][0]
+        assert pg.scene.skeleton("start").bone_color == GHOST[0]
     finally:
         pg.close()
 
 
-@pytest.mark.skipif(not _ik_ready(), reason="course.ik.solve is not written yet")
+def test_dragging_the_target_moves_the_sliders_and_solves_once(monkeypatch):
+    from course.skeleton import chain
+
+    arm = chain([1.0] * 5, axes=[0, 0, 1])
+    pg = controls.ik_playground(arm, methods=["dls"])
+    try:
+        solves = []
+        solve = pg.solve
+        monkeypatch.setattr(pg, "solve", lambda: (solves.append(1), solve()))
+        pg._dragged(np.array([2.0, 3.0, 0.0]))
+        assert len(solves) == 1, "three sliders moved but the target should be solved once"
+        np.testing.assert_allclose(pg.target, [2.0, 3.0, 0.0])
+        assert pg.result.converged
+        np.testing.assert_allclose(pg.result.positions[-1], [2.0, 3.0, 0.0], atol=1e-4)
+        pg._dragged(np.array([99.0, 0.0, 0.0]))  # beyond the sliders: clipped to their range
+        assert pg.target[0] == pg.sliders["x"].max
+    finally:
+        pg.close()
+
+
+def test_ik_playground_convergence_plot_updates_in_place():
+    from course.skeleton import chain
+
+    pg = controls.ik_playground(chain([1.0] * 7, axes=[0, 0, 1]), methods=["dls", "ccd"])
+    try:
+        figure = pg.convergence.figure
+        pg.sliders["y"].value = pg.sliders["y"].value + 0.2
+        assert pg.convergence.figure is figure
+        np.testing.assert_allclose(pg.convergence.curve.get_ydata(),
+                                   np.maximum(pg.result.residuals, np.finfo(float).eps))
+        pg.sliders["method"].value = "ccd"
+        assert pg.convergence.label.get_text().startswith("ccd")
+    finally:
+        pg.close()
+
+
 def test_full_body_ik_reaches_the_moved_target(sample_motion):
     fb = controls.full_body_ik(sample_motion, 10)
     try:
@@ -146,6 +210,19 @@ def test_full_body_ik_reaches_the_moved_target(sample_motion):
         drawn = fb.scene.skeleton("IK").positions
         assert np.linalg.norm(drawn[j] - fb.targets[name]) < np.linalg.norm(
             fb.positions[j] - fb.targets[name])
+    finally:
+        fb.close()
+
+
+def test_full_body_ik_drag_moves_the_edited_target(sample_motion):
+    fb = controls.full_body_ik(sample_motion, 10)
+    try:
+        name = fb.sliders["edit"].value
+        goal = fb.targets[name] + [1.0, 2.0, 0.5]
+        fb._dragged(goal)
+        np.testing.assert_allclose(fb.targets[name], goal, atol=1e-9)
+        j = fb.skeleton.index(name)
+        assert np.linalg.norm(fb.scene.skeleton("IK").positions[j] - goal) < 1e-3
     finally:
         fb.close()
 

@@ -14,8 +14,10 @@ from scipy.spatial.transform import Rotation, Slerp  # noqa: E402
 from course.viz.figures import (  # noqa: E402
     JOINT,
     ChainPlot,
+    ConvergenceFigure,
     GimbalFigure,
     JointAngleFigure,
+    SlerpArcFigure,
     convergence_plot,
     slerp_arc_figure,
 )
@@ -65,8 +67,18 @@ def test_chain_3d_joints_at_their_projection():
     uv = np.column_stack([disp[:, 0], plot.figure.bbox.height - disp[:, 1]])
     assert _joint_coloured(plot.image(), uv).all()
     moved = pose + [0.5, 0, 0]
+
+    def no_full_draw() -> None:
+        raise AssertionError("update() must blit in 3D too: the view does not move")
+
+    draw, plot.figure.canvas.draw = plot.figure.canvas.draw, no_full_draw
     plot.update(moved)
+    plot.figure.canvas.draw = draw
     np.testing.assert_allclose(np.column_stack(plot.joints.get_data_3d()), moved[:, [2, 0, 1]])
+    px, py, _ = proj3d.proj_transform(moved[:, 2], moved[:, 0], moved[:, 1], ax.get_proj())
+    disp = ax.transData.transform(np.column_stack([px, py]))
+    uv = np.column_stack([disp[:, 0], plot.figure.bbox.height - disp[:, 1]])
+    assert _joint_coloured(plot.image(), uv).all(), "the blitted joints are not where they project"
 
 
 def test_chain_plot_rejects_bad_shapes():
@@ -115,7 +127,7 @@ def test_slerp_ticks_evenly_spaced_nlerp_not():
     q1 = Rotation.from_euler("XYZ", [0.3, 2.4, 0.5])
     fig = slerp_arc_figure(q0.as_quat(scalar_first=True), q1.as_quat(scalar_first=True), n=9)
     ax = fig.axes[0]
-    marks = [ln for ln in ax.get_lines() if ln.get_linestyle() == "None"]
+    marks = [ln for ln in ax.get_lines() if ln.get_marker() == "o"]
     nlerp, slerp = (np.column_stack(ln.get_data_3d())[:, [1, 2, 0]] for ln in marks)
     ref = Slerp([0, 1], Rotation.concatenate([q0, q1]))(np.linspace(0, 1, 9)).apply([0, 0, 1])
     np.testing.assert_allclose(slerp, ref, atol=1e-9)
@@ -131,3 +143,56 @@ def test_joint_angle_cursor_moves_to_the_frame():
     np.testing.assert_allclose(fig.cursor.get_xdata(), [2.0, 2.0])
     with pytest.raises(ValueError, match="angles"):
         JointAngleFigure(np.zeros((5, 3)), 0.1, ["a"])
+
+
+def _no_full_draw(figure) -> None:
+    def refuse() -> None:
+        raise AssertionError("this update must blit, not redraw the figure")
+
+    figure.canvas.draw = refuse
+
+
+def test_slerp_arc_moves_by_blitting_and_marks_t():
+    q0 = Rotation.identity()
+    q1 = Rotation.from_euler("XYZ", [0.3, 2.4, 0.5])
+    arc = SlerpArcFigure(q0.as_quat(scalar_first=True), q1.as_quat(scalar_first=True), t=0.25)
+    before = np.asarray(arc.figure.canvas.buffer_rgba()).copy()
+    _no_full_draw(arc.figure)
+    arc.set_t(0.75)
+    slerp_marker = np.column_stack(arc.current[1].get_data_3d())[:, [1, 2, 0]]
+    ref = Slerp([0, 1], Rotation.concatenate([q0, q1]))([0.75]).apply([0, 0, 1])
+    np.testing.assert_allclose(slerp_marker, ref, atol=1e-9)
+    q2 = Rotation.from_euler("XYZ", [1.0, -0.4, 0.2])
+    arc.set_rotations(q0.as_quat(scalar_first=True), q2.as_quat(scalar_first=True))
+    end = np.column_stack(arc.marks[1].get_data_3d())[-1, [1, 2, 0]]
+    np.testing.assert_allclose(end, q2.apply([0, 0, 1]), atol=1e-9)
+    assert not np.array_equal(before, np.asarray(arc.figure.canvas.buffer_rgba()))
+
+
+def test_gimbal_update_blits_unless_the_order_changes():
+    fig = GimbalFigure("XYZ", (0.1, 0.2, 0.3))
+    before = np.asarray(fig.figure.canvas.buffer_rgba()).copy()
+    draw = fig.figure.canvas.draw
+    _no_full_draw(fig.figure)
+    fig.update((0.9, 0.2, 0.3), "XYZ")
+    assert not np.array_equal(before, np.asarray(fig.figure.canvas.buffer_rgba()))
+    fig.figure.canvas.draw = draw
+    fig.update((0.9, 0.2, 0.3), "zxz")  # a new title: one full redraw
+    assert "zxz" in fig.ax.get_title()
+
+
+def test_convergence_figure_blits_within_its_limits_and_rescales_beyond():
+    fig = ConvergenceFigure()
+    fig.update(10.0 ** -np.arange(6.0), 1e-4, "dls: 5 iterations")
+    assert fig.ax.get_yscale() == "log"
+    assert fig.limits == (10.0, 1e-7, 1.0)
+    np.testing.assert_allclose(fig.curve.get_ydata(), 10.0 ** -np.arange(6.0))
+    draw = fig.figure.canvas.draw
+    _no_full_draw(fig.figure)
+    fig.update(0.5 * 10.0 ** -np.arange(7.0), 1e-4, "dls: 6 iterations")  # same limits
+    assert fig.label.get_text() == "dls: 6 iterations"
+    fig.figure.canvas.draw = draw
+    fig.update(0.9 ** np.arange(40.0), 1e-4, "ccd: 39 iterations")  # more iterations
+    assert fig.limits[0] == 50.0
+    np.testing.assert_allclose(fig.tol_line.get_ydata(), [1e-4, 1e-4])
+    assert fig.png()[:4] == b"\x89PNG"

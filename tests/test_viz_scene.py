@@ -134,11 +134,15 @@ def test_two_skeletons_have_distinct_colours_a_legend_and_a_ground(tmp_path):
         ref = _near(img, sc.project(POSE[1:3]), _rgb(PALETTE[0][1]))
         stu = _near(img, sc.project(shifted[1:3]), _rgb(PALETTE[1][1]))
         assert ref.all() and stu.all()
-        # the floor sits just under the lowest joint, across the view below the feet
-        below = sc.project(np.array([[35.0, 0.0, 20.0]]))[0]
-        c, r = np.round(below).astype(int)
-        floor = img[r, c].astype(int)
-        assert np.abs(floor - img[r, 0].astype(int)).max() > 10 or floor.std() < 8
+        # the floor sits just under the lowest joint (y = 5), behind and between the feet
+        floor_y = 5.0 - 0.022 * sc._scale
+        for point in ([35.0, floor_y, -30.0], [35.0, floor_y, -60.0]):
+            c, r = np.round(sc.project(np.array([point]))[0]).astype(int)
+            assert 0 <= r < img.shape[0], "the floor behind the feet is out of view"
+            floor = img[r, c, :3].astype(int)
+            assert np.ptp(floor) < 18, f"the floor tiles are neutral grey, got {floor}"
+        sky = img[5, 5, :3].astype(int)
+        assert np.ptp(sky) > 20, f"the sky is bluish, got {sky}"
     finally:
         sc.close()
 
@@ -169,3 +173,14 @@ def test_bad_input_names_the_argument(scene):
         SkeletonScene(camera="diagonal")
     with pytest.raises(ValueError, match="already used"):
         scene.add_skeleton(PARENTS, POSE, name="student")
+
+
+def test_the_target_handle_reports_where_it_is_dragged(scene):
+    moved = []
+    handle = scene.add_target_handle([40, 160, 0], moved.append)
+    handle.SetCenter(10.0, 150.0, 5.0)  # what a mouse drag does, then VTK's event
+    handle.InvokeEvent("InteractionEvent")
+    np.testing.assert_allclose(moved[-1], [10.0, 150.0, 5.0])
+    scene.move_target_handle([0.0, 170.0, 0.0])
+    np.testing.assert_allclose(handle.GetCenter(), [0.0, 170.0, 0.0])
+    handle.Off()

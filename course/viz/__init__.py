@@ -19,7 +19,9 @@ _EXPORTS = {
     "scene": ("SkeletonScene", "FrameScene", "show_skeletons", "PALETTE"),
     "figures": (
         "ChainPlot",
+        "ConvergenceFigure",
         "JointAngleFigure",
+        "SlerpArcFigure",
         "GimbalFigure",
         "convergence_plot",
         "draw_frame",

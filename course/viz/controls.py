@@ -10,7 +10,7 @@ place; animation (``widgets.Play``) runs in the browser, so no cell ever blocks.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import ipywidgets as widgets
@@ -18,8 +18,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._backend import latest_on_gl_thread
-from .figures import GimbalFigure, convergence_plot, figure_png, slerp_arc_figure
-from .scene import FrameScene, SkeletonScene
+from .figures import ConvergenceFigure, GimbalFigure, JointAngleFigure, SlerpArcFigure
+from .scene import GHOST, FrameScene, SkeletonScene
 
 Array = NDArray[np.float64]
 
@@ -34,6 +34,13 @@ def _angle_slider(description: str, value: float = 0.0, limit: float = 180.0
     """A slider in degrees (what students read); the math converts to radians."""
     return widgets.FloatSlider(value=value, min=-limit, max=limit, step=1.0,
                                description=description, **_slider_style())
+
+
+def _set_sliders(sliders: dict[str, widgets.Widget], position: Array) -> None:
+    """Put ``position (3,)`` into the x/y/z sliders, clipped to their ranges."""
+    for k, c in enumerate("xyz"):
+        s = sliders[c]
+        s.value = float(np.clip(position[k], s.min, s.max))
 
 
 def _on_value(widget: widgets.Widget, handler: Any) -> None:
@@ -175,6 +182,8 @@ class SlerpExplorer(Control):
         }
         self.readout = widgets.HTML()
         self.scene = FrameScene(3, labels=["LERP", "NLERP", "SLERP"], window_size=(780, 330))
+        self.q0, self.q1 = self._ends()
+        self.arc = SlerpArcFigure(self.q0, self.q1, t=t)
         self.arc_image = widgets.Image(format="png", width=330)
         left = widgets.VBox([*self.sliders.values(), self.readout])
         self.widget = widgets.VBox([self.scene.widget(), widgets.HBox([left, self.arc_image])])
@@ -182,18 +191,23 @@ class SlerpExplorer(Control):
             _on_value(s, self._changed_t if name == "t" else self._changed_ends)
         self._changed_ends()
 
-    def _changed_ends(self, _change: Any = None) -> None:
+    def _ends(self) -> tuple[Array, Array]:
         from course.rotations import quat_from_euler
 
         ang = np.radians([s.value for s in self.sliders.values()][:6]).reshape(2, 3)
-        self.q0, self.q1 = quat_from_euler(ang, "XYZ")
-        self.arc_image.value = figure_png(slerp_arc_figure(self.q0, self.q1))
+        return tuple(quat_from_euler(ang, "XYZ"))
+
+    def _changed_ends(self, _change: Any = None) -> None:
+        self.q0, self.q1 = self._ends()
+        self.arc.set_rotations(self.q0, self.q1)
         self._changed_t()
 
     def _changed_t(self, _change: Any = None) -> None:
         from course.rotations import lerp, matrix_from_quat, nlerp, quat_angle, slerp
 
         t = self.sliders["t"].value
+        self.arc.set_t(t)
+        self.arc_image.value = self.arc.png()
         q1 = self.q1 if np.dot(self.q0, self.q1) >= 0 else -self.q1  # same hemisphere as q0
         q = {"LERP": lerp(self.q0, q1, t), "NLERP": nlerp(self.q0, q1, t),
              "SLERP": slerp(self.q0, q1, t)}
@@ -284,11 +298,9 @@ class FKExplorer(Control):
             self.local_rotations, self.root_position)
         # frame the whole reach (the pose can turn anywhere), not just this pose
         reach = float(np.linalg.norm(self.positions - self.positions[0], axis=1).max())
-        corners = _reach_points(self.positions[0], reach)
         self.scene = SkeletonScene(window_size=(640, 520))
         self.scene.add_skeleton(skeleton.parents, self.positions, self.orientations,
-                                name="pose", axes=axes,
-                                frame_points=np.concatenate([self.positions, corners]))
+                                name="pose", axes=axes, frame_points=self.positions, reach=reach)
         left = widgets.VBox([self.reset_button, self.accordion, self.readout],
                             layout=widgets.Layout(width="400px", max_height="540px",
                                                   overflow="auto"))
@@ -354,9 +366,12 @@ def fk_explorer(skeleton: Any, local_rotations: ArrayLike | None = None,
 
 class BVHPlayer(Control):
     """Play a clip: play/pause (``widgets.Play``, runs in the browser), frame slider, speed,
-    loop, camera. FK runs once for the whole clip; a frame change is a point update."""
+    loop, camera. FK runs once for the whole clip; a frame change is a point update. The
+    root's path is drawn on the floor; ``curves`` (label -> ``(F,)`` angles in radians, e.g. a
+    knee's flexion) are plotted under the view with a cursor at the current frame."""
 
-    def __init__(self, motion: Any, *, camera: str = "follow", display_fps: float = 30.0) -> None:
+    def __init__(self, motion: Any, *, camera: str = "follow", display_fps: float = 30.0,
+                 curves: Mapping[str, ArrayLike] | None = None) -> None:
         self.motion = motion
         self.positions, self.orientations = motion.forward_kinematics()
         n = self.positions.shape[0]
@@ -381,13 +396,25 @@ class BVHPlayer(Control):
         self.scene.add_skeleton(motion.skeleton.parents, self.positions[0], name=motion.name
                                 or "motion", frame_points=self.positions)
         self.scene.set_camera(camera)
+        floor = float(self.positions[..., 1].min())
+        path = self.positions[:, 0] * [1.0, 0.0, 1.0] + [0.0, floor, 0.0]
+        self.scene.add_trail(capacity=n)
+        self.scene.set_trail(path)
+        self.curves = self.curves_image = None
+        if curves:
+            angles = np.column_stack([np.asarray(c, dtype=np.float64).reshape(n)
+                                      for c in curves.values()])
+            self.curves = JointAngleFigure(angles, motion.frame_time, list(curves),
+                                           figsize=(7.2, 2.4))
+            self.curves_image = widgets.Image(format="png", width=720)
         _on_value(self.sliders["frame"], lambda c: self.show_frame(c["new"]))
         _on_value(self.sliders["speed"], lambda _c: self._set_speed())
         _on_value(self.sliders["camera"], lambda c: self.scene.set_camera(c["new"], render=True))
         self._set_speed()
         row = widgets.HBox([self.play, self.sliders["frame"], self.sliders["speed"],
                             self.sliders["loop"], self.sliders["camera"]])
-        self.widget = widgets.VBox([self.scene.widget(), row, self.readout])
+        self.widget = widgets.VBox([self.scene.widget(), row, self.readout,
+                                    *([self.curves_image] if self.curves_image else [])])
         self.show_frame(0)
 
     def _set_speed(self) -> None:
@@ -401,11 +428,15 @@ class BVHPlayer(Control):
         self.scene.set_pose(self.positions[frame])
         self.readout.value = (f"frame {frame} / {self.positions.shape[0] - 1}, "
                               f"t = {frame * self.motion.frame_time:.3f} s")
+        if self.curves is not None:
+            self.curves.set_frame(frame)
+            self.curves_image.value = self.curves.png()
 
 
-def bvh_player(motion: Any, *, camera: str = "follow") -> BVHPlayer:
+def bvh_player(motion: Any, *, camera: str = "follow",
+               curves: Mapping[str, ArrayLike] | None = None) -> BVHPlayer:
     """Play a :class:`course.motion.Motion`: see :class:`BVHPlayer`."""
-    return BVHPlayer(motion, camera=camera)
+    return BVHPlayer(motion, camera=camera, curves=curves)
 
 
 # -- inverse kinematics ------------------------------------------------------------------------
@@ -419,11 +450,6 @@ def _ik_methods() -> tuple[str, ...]:
     import course.ik
 
     return tuple(getattr(course.ik, "METHODS", IK_METHODS))
-
-
-def _reach_points(center: Array, reach: float) -> Array:
-    """The six extremes of the sphere a chain can sweep: what a view of it must cover."""
-    return center + reach * np.concatenate([np.eye(3), -np.eye(3)])
 
 
 class IKPlayground(Control):
@@ -472,15 +498,20 @@ class IKPlayground(Control):
         }
         self.readout = widgets.HTML()
         self.scene = SkeletonScene(window_size=(640, 500))
-        frame = np.concatenate([start_pos, _reach_points(center, reach)])
-        self.scene.add_skeleton(skeleton.parents, start_pos, name="start", color=(
-            "#c3cad3", "#9aa5b1"), opacity=0.55, frame_points=frame[None])
+        self.scene.add_skeleton(skeleton.parents, start_pos, name="start", color=GHOST,
+                                opacity=0.55, frame_points=start_pos, reach=reach)
         self.scene.add_skeleton(skeleton.parents, start_pos, name="solution")
         self.scene.add_trail(capacity=512)
+        self.convergence = ConvergenceFigure()
         self.convergence_image = widgets.Image(format="png", width=420)
-        self._convergence: Any = None
         self._solving = False
-        for name in ("x", "y", "z", "method", "tol", "max_iter"):
+        self._dragging = False
+        # where the view takes the mouse (trame), the target is also a sphere to drag
+        self.handle = (self.scene.add_target_handle(goal, self._dragged)
+                       if self.scene.backend != "static" else None)
+        for name in ("x", "y", "z"):
+            _on_value(self.sliders[name], lambda _c: self._slider_moved())
+        for name in ("method", "tol", "max_iter"):
             _on_value(self.sliders[name], lambda _c: self.solve())
         _on_value(self.sliders["iteration"], lambda c: self.show_iteration(c["new"]))
         left = widgets.VBox([*self.sliders.values(), self.readout, self.convergence_image])
@@ -490,6 +521,20 @@ class IKPlayground(Control):
     @property
     def target(self) -> Array:
         return np.array([self.sliders[c].value for c in "xyz"])
+
+    def _slider_moved(self) -> None:
+        if not self._dragging:
+            self.scene.move_target_handle(self.target)
+            self.solve()
+
+    def _dragged(self, position: Array) -> None:
+        """The handle was dragged to ``position``: the sliders follow, then one solve."""
+        self._dragging = True
+        try:
+            _set_sliders(self.sliders, position)
+        finally:
+            self._dragging = False
+        self.solve()
 
     def solve(self) -> None:
         """Solve IK from the start pose to the current target, recording every iterate."""
@@ -520,22 +565,11 @@ class IKPlayground(Control):
         self.show_iteration(it.value)
 
     def _plot_convergence(self) -> None:
-        """Update the residual curve's data (the figure is made once)."""
-        residuals = np.maximum(np.asarray(self.result.residuals, dtype=np.float64),
-                               np.finfo(float).eps)
-        if self._convergence is None:
-            self._convergence = convergence_plot({"residual": residuals},
-                                                 tol=self.sliders["tol"].value)
-        ax = self._convergence
-        curve, tol_line = ax.get_lines()[:2]
-        curve.set_data(np.arange(residuals.size), residuals)
-        curve.set_label(f"{self.sliders['method'].value} ({residuals.size - 1})")
-        tol_line.set_ydata([self.sliders["tol"].value] * 2)
-        ax.relim()
-        ax.autoscale_view()
-        ax.legend(frameon=False, fontsize="small")
-        ax.figure.canvas.draw()
-        self.convergence_image.value = figure_png(ax.figure)
+        """Blit the new residual curve into the figure made once."""
+        residuals = np.asarray(self.result.residuals, dtype=np.float64)
+        self.convergence.update(residuals, self.sliders["tol"].value,
+                                f"{self.sliders['method'].value}: {residuals.size - 1} iterations")
+        self.convergence_image.value = self.convergence.png()
 
     def show_iteration(self, k: int) -> None:
         """Show the k-th recorded pose of the last solve."""
@@ -595,10 +629,12 @@ class FullBodyIK(Control):
         }
         self.readout = widgets.HTML()
         self.scene = SkeletonScene(window_size=(640, 520))
-        self.scene.add_skeleton(sk.parents, self.positions, name="captured",
-                                color=("#c3cad3", "#9aa5b1"), opacity=0.6)
+        self.scene.add_skeleton(sk.parents, self.positions, name="captured", color=GHOST,
+                                opacity=0.6)
         self.scene.add_skeleton(sk.parents, self.positions, name="IK")
         self._editing = False
+        self.handle = (self.scene.add_target_handle(self.positions[0], self._dragged)
+                       if self.scene.backend != "static" else None)
         _on_value(self.sliders["effectors"], lambda _c: self._effectors_changed())
         _on_value(self.sliders["edit"], lambda _c: self._load_target())
         for k in ("root", "method"):
@@ -623,6 +659,7 @@ class FullBodyIK(Control):
             rel = self.targets[name] - self.root_position
             for k, c in enumerate("xyz"):
                 self.sliders[c].value = float(rel[k])
+            self.scene.move_target_handle(self.targets[name])
         self._editing = False
         self.solve()
 
@@ -630,6 +667,20 @@ class FullBodyIK(Control):
         name = self.sliders["edit"].value
         if self._editing or name is None:
             return
+        self.targets[name] = self.root_position + np.array([self.sliders[c].value for c in "xyz"])
+        self.scene.move_target_handle(self.targets[name])
+        self.solve()
+
+    def _dragged(self, position: Array) -> None:
+        """The handle was dragged: the edited effector's target (and its sliders) follow."""
+        name = self.sliders["edit"].value
+        if name is None:
+            return
+        self._editing = True
+        try:
+            _set_sliders(self.sliders, position - self.root_position)
+        finally:
+            self._editing = False
         self.targets[name] = self.root_position + np.array([self.sliders[c].value for c in "xyz"])
         self.solve()
 

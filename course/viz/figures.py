@@ -45,6 +45,33 @@ def figure_png(fig: Figure) -> bytes:
     return png_bytes(np.asarray(fig.canvas.buffer_rgba()))
 
 
+class _Blitter:
+    """A figure's static part rendered once and cached; the moving artists (created with
+    ``animated=True``, so a full draw skips them) are drawn over it on every update. In 3D
+    this holds while the view stays put: the projection is computed by the cached draw."""
+
+    def __init__(self, figure: Figure, artists: Sequence[Any]) -> None:
+        self.figure = figure
+        self.artists = list(artists)
+        self._background: Any = None
+
+    def full_redraw(self) -> None:
+        """Render the static part and cache it (again after a change of limits or titles)."""
+        self.figure.canvas.draw()
+        self._background = self.figure.canvas.copy_from_bbox(self.figure.bbox)
+        self.blit()
+
+    def blit(self) -> None:
+        canvas = self.figure.canvas
+        if self._background is None:
+            self.full_redraw()
+            return
+        canvas.restore_region(self._background)
+        for artist in self.artists:
+            artist.axes.draw_artist(artist)
+        canvas.blit(self.figure.bbox)
+
+
 def _mpl3(p: ArrayLike) -> tuple[Array, Array, Array]:
     """World (x, y, z), y up, as matplotlib's (X, Y, Z), Z up: X = z, Y = x, Z = y. A cyclic
     permutation, so right-handed frames stay right-handed on screen."""
@@ -133,8 +160,8 @@ class ChainPlot:
         self.trail = self._line(np.full((1, dims), np.nan), color=TRAIL, lw=1.5, alpha=0.8,
                                 animated=True, zorder=2)
         self._trail_pts: list[Array] = []
-        self._background = None
         self.positions = pos
+        self._blitter = _Blitter(self.figure, (self.trail, self.bones, self.joints, self.target))
         self.full_redraw()
 
     def _project(self, positions: ArrayLike) -> Array:
@@ -161,15 +188,7 @@ class ChainPlot:
 
     def full_redraw(self) -> None:
         """Render everything and cache the static background (also after a resize)."""
-        canvas = self.figure.canvas
-        canvas.draw()
-        self._background = canvas.copy_from_bbox(self.figure.bbox)
-        self._draw_moving()
-
-    def _draw_moving(self) -> None:
-        for artist in (self.trail, self.bones, self.joints, self.target):
-            self.ax.draw_artist(artist)
-        self.figure.canvas.blit(self.figure.bbox)
+        self._blitter.full_redraw()
 
     def update(
         self,
@@ -179,7 +198,8 @@ class ChainPlot:
         trail: bool = False,
     ) -> None:
         """Move the chain (and the target); restore the cached background and draw only the
-        moving artists. ``trail=True`` appends the end effector (last joint) to the trail."""
+        moving artists, in 2D and in 3D (the view is fixed). ``trail=True`` appends the end
+        effector (last joint) to the trail."""
         pos = self._project(positions)
         self.positions = pos
         self._set(self.bones, _bone_xy(self.parents, pos))
@@ -191,11 +211,7 @@ class ChainPlot:
         if trail:
             self._trail_pts.append(pos[-1])
             self._set(self.trail, np.array(self._trail_pts))
-        if self.dims == 3:  # 3D projections depend on the whole axes draw: redraw it all
-            self.figure.canvas.draw()
-            return
-        self.figure.canvas.restore_region(self._background)
-        self._draw_moving()
+        self._blitter.blit()
 
     def clear_trail(self) -> None:
         self._trail_pts.clear()
@@ -243,6 +259,65 @@ def convergence_plot(
     ax.grid(True, which="both", color="#e3e7ec", lw=0.6)
     ax.legend(frameon=False, fontsize="small")
     return ax
+
+
+def _decade(x: float, up: bool, shift: int = 0) -> float:
+    """The power of ten at or above (``up``) or below ``x``, times ``10**shift``."""
+    exponent = np.log10(max(x, np.finfo(float).tiny))
+    return float(10.0 ** (int(np.ceil(exponent) if up else np.floor(exponent)) + shift))
+
+
+class ConvergenceFigure:
+    """One solve's residual ``|e - t|`` against iteration (log scale) and the tolerance, for a
+    control that solves again on every event.
+
+    The axes change in coarse steps only (x: 10, 20, 50, 100 ... iterations; y: whole decades,
+    from a thousandth of the tolerance up), so nearly every update just blits the curve over
+    the cached axes; a change of those limits redraws the figure once.
+    """
+
+    def __init__(self, *, figsize: tuple[float, float] = (4.6, 3.0)) -> None:
+        self.figure = _figure(figsize)
+        self.ax = self.figure.add_subplot()
+        self.ax.set_yscale("log")
+        self.ax.set_xlabel("iteration")
+        self.ax.set_ylabel("residual  |e - t|")
+        self.ax.grid(True, which="both", color="#e3e7ec", lw=0.6)
+        self.curve = self.ax.plot([], [], marker="o", ms=3, lw=1.8, color=METHOD_COLORS[0],
+                                  animated=True)[0]
+        self.tol_line = self.ax.axhline(1.0, color="#4a5561", ls="--", lw=1, animated=True)
+        self.label = self.ax.text(0.97, 0.95, "", transform=self.ax.transAxes, ha="right",
+                                  va="top", fontsize="small", animated=True)
+        self.limits: tuple[float, float, float] | None = None  # (x max, y min, y max)
+        self._blitter = _Blitter(self.figure, (self.tol_line, self.curve, self.label))
+
+    def update(self, residuals: ArrayLike, tol: float, label: str = "") -> None:
+        """Show ``residuals (n,)`` (iteration 0 = the start) against the tolerance ``tol``."""
+        r = np.maximum(np.asarray(residuals, dtype=np.float64).reshape(-1), np.finfo(float).eps)
+        steps = max(r.size - 1, 1)
+        limits = (
+            next(float(m * 10**k) for k in range(1, 9) for m in (1, 2, 5) if m * 10**k >= steps),
+            min(_decade(tol, up=False, shift=-3), _decade(r.min(), up=False)),
+            _decade(max(r.max(), tol), up=True),
+        )
+        if self.limits is not None:  # limits that still fit, and are not far off, are kept
+            x_max, y_min, y_max = self.limits
+            limits = (x_max if limits[0] <= x_max < 5 * limits[0] else limits[0],
+                      y_min if limits[1] >= y_min > 1e-4 * limits[1] else limits[1],
+                      y_max if limits[2] <= y_max < 1e3 * limits[2] else limits[2])
+        self.curve.set_data(np.arange(r.size), r)
+        self.tol_line.set_ydata([tol, tol])
+        self.label.set_text(label)
+        if limits != self.limits:
+            self.limits = limits
+            self.ax.set_xlim(-0.02 * limits[0], limits[0])
+            self.ax.set_ylim(limits[1], limits[2])
+            self._blitter.full_redraw()
+        else:
+            self._blitter.blit()
+
+    def png(self) -> bytes:
+        return figure_png(self.figure)
 
 
 def draw_frame(
@@ -307,14 +382,19 @@ class GimbalFigure:
     def __init__(self, order: str = "XYZ", angles: ArrayLike = (0.0, 0.0, 0.0)) -> None:
         self.ax = _sphere_axes()
         self.figure = self.ax.figure
-        self.rings = [self.ax.plot([], [], [], lw=4, color=AXIS_RGB[0])[0] for _ in range(3)]
-        self.frame = [self.ax.plot([], [], [], lw=2.5, color=c)[0] for c in AXIS_RGB]
+        self.rings = [self.ax.plot([], [], [], lw=4, color=AXIS_RGB[0], animated=True)[0]
+                      for _ in range(3)]
+        self.frame = [self.ax.plot([], [], [], lw=2.5, color=c, animated=True)[0]
+                      for c in AXIS_RGB]
+        self._blitter = _Blitter(self.figure, (*self.rings, *self.frame))
+        self._order: str | None = None
         self.update(angles, order)
 
     def update(self, angles: ArrayLike, order: str) -> None:
         from course.rotations import matrix_from_axis_angle
 
         a = np.asarray(angles, dtype=np.float64).reshape(3)
+        title = order
         if order.islower():
             order, a = order[::-1].upper(), a[::-1]
         R = np.eye(3)
@@ -326,8 +406,97 @@ class GimbalFigure:
             self.rings[k].set_color(AXIS_RGB[axis])
         for axis, line in enumerate(self.frame):
             line.set_data_3d(*_mpl3(np.stack([np.zeros(3), 0.55 * R[:, axis]])))
-        self.ax.set_title(f"gimbal rings, order {order}", fontsize="medium")
-        self.figure.canvas.draw()
+        if title != self._order:  # the title is part of the cached background
+            self._order = title
+            self.ax.set_title(f"gimbal rings, order {title}", fontsize="medium")
+            self._blitter.full_redraw()
+        else:
+            self._blitter.blit()
+
+    def png(self) -> bytes:
+        return figure_png(self.figure)
+
+
+class SlerpArcFigure:
+    """The path of ``R(t) v`` on the unit sphere for SLERP and NLERP between ``q0`` and ``q1``,
+    with ticks at equal steps of t. SLERP's ticks are evenly spaced (constant angular speed);
+    NLERP's bunch in the middle (LERP draws NLERP's path: as a rotation q/|q| is q). A diamond
+    marks the current ``t``.
+
+    Built once; :meth:`set_rotations` and :meth:`set_t` move the paths and markers by
+    blitting over the cached sphere (``animated=False`` gives a plain figure for display).
+    """
+
+    INTERPOLATIONS = ("nlerp", "slerp")
+
+    def __init__(
+        self,
+        q0: ArrayLike,
+        q1: ArrayLike,
+        *,
+        vector: ArrayLike = (0.0, 0.0, 1.0),
+        n: int = 9,
+        methods: Sequence[str] = ("nlerp", "slerp"),
+        t: float | None = None,
+        animated: bool = True,
+    ) -> None:
+        for method in methods:
+            if method not in self.INTERPOLATIONS:
+                raise ValueError(f"methods must be among {self.INTERPOLATIONS}, got {method!r}")
+        vec = np.asarray(vector, dtype=np.float64)
+        self.vector = vec / np.linalg.norm(vec)
+        self.methods = tuple(methods)
+        self.ticks = np.linspace(0, 1, n)
+        self.ax = _sphere_axes()
+        self.figure = self.ax.figure
+        u, v = np.mgrid[0 : 2 * np.pi : 25j, 0 : np.pi : 13j]
+        self.ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v),
+                               color="#dde2e8", lw=0.5)
+        self.paths, self.marks, self.current = [], [], []
+        for i, method in enumerate(self.methods):
+            color = METHOD_COLORS[i]
+            # earlier methods wider and hollow underneath, so coinciding paths stay visible
+            self.paths.append(self.ax.plot([], [], [], color=color, lw=4.5 - 2 * i, alpha=0.9,
+                                           label=method.upper(), animated=animated)[0])
+            self.marks.append(self.ax.plot([], [], [], ls="none", marker="o", ms=10 - 4 * i,
+                                           color=color, mfc="white" if i == 0 else color, mew=2,
+                                           animated=animated)[0])
+            self.current.append(self.ax.plot([], [], [], ls="none", marker="D", ms=9,
+                                             color=color, animated=animated)[0])
+        self.ax.legend(loc="upper left", frameon=False)
+        self.ax.set_title(f"R(t) v at t = 0, 1/{n - 1}, ..., 1", fontsize="medium")
+        self._blitter = (_Blitter(self.figure, (*self.paths, *self.marks, *self.current))
+                         if animated else None)
+        self.t = t
+        self.set_rotations(q0, q1)
+
+    def _rotated(self, method: str, t: Array) -> Array:
+        from course.rotations import nlerp, quat_rotate, slerp
+
+        interp = slerp if method == "slerp" else nlerp
+        return quat_rotate(interp(self.q0, self.q1, t), self.vector)
+
+    def set_rotations(self, q0: ArrayLike, q1: ArrayLike) -> None:
+        """New end rotations ``q0, q1 (4,)``: the paths and ticks move."""
+        self.q0 = np.asarray(q0, dtype=np.float64)
+        self.q1 = np.asarray(q1, dtype=np.float64)
+        dense = np.linspace(0, 1, 121)
+        for method, path, marks in zip(self.methods, self.paths, self.marks, strict=True):
+            path.set_data_3d(*_mpl3(self._rotated(method, dense)))
+            marks.set_data_3d(*_mpl3(self._rotated(method, self.ticks)))
+        self.set_t(self.t)
+
+    def set_t(self, t: float | None) -> None:
+        """Mark ``R(t) v`` for each method (``None``: no marker)."""
+        self.t = t
+        for method, marker in zip(self.methods, self.current, strict=True):
+            m = (self._rotated(method, np.array([t])) if t is not None
+                 else np.full((1, 3), np.nan))
+            marker.set_data_3d(*_mpl3(m))
+        if self._blitter is not None:
+            self._blitter.blit()
+        else:
+            self.figure.canvas.draw()
 
     def png(self) -> bytes:
         return figure_png(self.figure)
@@ -342,37 +511,9 @@ def slerp_arc_figure(
     methods: Sequence[str] = ("nlerp", "slerp"),
     t: float | None = None,
 ) -> Figure:
-    """The path of ``R(t) v`` on the unit sphere for SLERP and NLERP between ``q0`` and ``q1``,
-    with ticks at equal steps of t. SLERP's ticks are evenly spaced (constant angular speed);
-    NLERP's bunch in the middle (LERP draws NLERP's path: as a rotation q/|q| is q).
-    ``t`` marks the current parameter."""
-    from course.rotations import nlerp, quat_rotate, slerp
-
-    interp = {"slerp": slerp, "nlerp": nlerp}
-    ax = _sphere_axes()
-    u, v = np.mgrid[0 : 2 * np.pi : 25j, 0 : np.pi : 13j]
-    ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v), color="#dde2e8",
-                      lw=0.5)
-    vec = np.asarray(vector, dtype=np.float64)
-    vec = vec / np.linalg.norm(vec)
-    dense, ticks = np.linspace(0, 1, 121), np.linspace(0, 1, n)
-    for i, method in enumerate(methods):
-        if method not in interp:
-            raise ValueError(f"methods must be among {tuple(interp)}, got {method!r}")
-        color = METHOD_COLORS[i]
-        path = quat_rotate(interp[method](q0, q1, dense), vec)
-        marks = quat_rotate(interp[method](q0, q1, ticks), vec)
-        # earlier methods wider and hollow underneath, so coinciding paths stay visible
-        ax.plot(*_mpl3(path), color=color, lw=4.5 - 2 * i, label=method.upper(), alpha=0.9)
-        ax.plot(*_mpl3(marks), ls="none", marker="o", ms=10 - 4 * i, color=color,
-                mfc="white" if i == 0 else color, mew=2)
-        if t is not None:
-            m = quat_rotate(interp[method](q0, q1, np.array([t])), vec)
-            ax.plot(*_mpl3(m), ls="none", marker="D", ms=9, color=color)
-    ax.legend(loc="upper left", frameon=False)
-    ax.set_title(f"R(t) v at t = 0, 1/{n - 1}, ..., 1", fontsize="medium")
-    ax.figure.canvas.draw()
-    return ax.figure
+    """A still :class:`SlerpArcFigure` (for a notebook cell): the figure itself."""
+    return SlerpArcFigure(q0, q1, vector=vector, n=n, methods=methods, t=t,
+                          animated=False).figure
 
 
 class JointAngleFigure:
@@ -426,8 +567,10 @@ class JointAngleFigure:
 
 __all__ = [
     "ChainPlot",
+    "ConvergenceFigure",
     "GimbalFigure",
     "JointAngleFigure",
+    "SlerpArcFigure",
     "convergence_plot",
     "draw_frame",
     "figure_png",

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import io
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -47,6 +47,8 @@ PALETTE: tuple[tuple[str, str], ...] = (
     ("#2bb673", "#e5484d"),  # green bones, red joints: after IK
     ("#8e6bd8", "#f08c3a"),
 )
+#: (bone colour, joint colour) of a faint pose drawn for comparison (before IK, the capture).
+GHOST = ("#aab4bf", "#8793a0")
 TARGET_COLOR = "#e5484d"
 TRAIL_COLOR = "#d1347a"
 AXIS_COLORS = np.array([[230, 57, 70], [42, 170, 82], [44, 110, 230]], dtype=np.uint8)
@@ -193,12 +195,15 @@ class SkeletonScene:
         self._scale = 1.0
         self._center = np.zeros(3)
         self._radius = 1.0
+        self._fit_points: Array | None = None  # framed by projection (else by a sphere)
+        self._sphere = False  # framing a sphere of reach
         self._camera = camera
         self._follow: tuple[str, Array] | None = None  # (skeleton, root position at last move)
         self._targets: pv.PolyData | None = None
         self._trail: pv.PolyData | None = None
         self._trail_count = 0
         self._widget: Any = None
+        self._handle: Any = None  # the draggable target sphere (interactive views)
 
     # -- building (once) -------------------------------------------------------------------
 
@@ -213,6 +218,7 @@ class SkeletonScene:
         axes: bool = False,
         opacity: float = 1.0,
         frame_points: ArrayLike | None = None,
+        reach: float | None = None,
     ) -> SkeletonActors:
         """Add a skeleton drawn as spheres (joints) and tubes (bones).
 
@@ -222,10 +228,13 @@ class SkeletonScene:
         positions : (J, 3) global joint positions ``p_j``.
         orientations : (J, 4) global orientations ``Q_j`` (w, x, y, z); needed for ``axes``.
         name : label in the legend (default ``"skeleton"``, ``"skeleton 2"``, ...).
-        color : (bone colour, joint colour); default: the next entry of :data:`PALETTE`.
+        color : (bone colour, joint colour); default: the first entry of :data:`PALETTE` that
+            no skeleton of the scene uses yet (a :data:`GHOST` beside it leaves blue first).
         axes : draw each joint's local frame (x red, y green, z blue).
         frame_points : (..., 3) points the camera and floor must cover (e.g. a whole clip);
             default: this pose. Only the first skeleton sets the framing.
+        reach : frame the whole sphere of this radius about the root as well (a chain that
+            can turn anywhere: sliders never take it out of view).
         """
         par = _as_parents(parents)
         n = par.size
@@ -233,10 +242,17 @@ class SkeletonScene:
         name = name or ("skeleton" if not self.skeletons else f"skeleton {len(self.skeletons) + 1}")
         if name in self.skeletons:
             raise ValueError(f"name {name!r} is already used in this scene")
-        bone_color, joint_color = color or PALETTE[len(self.skeletons) % len(PALETTE)]
+        used = {sk.bone_color for sk in self.skeletons.values()}
+        bone_color, joint_color = color or next(
+            (c for c in PALETTE if c[0] not in used), PALETTE[len(self.skeletons) % len(PALETTE)])
         if not self.skeletons:
-            self._frame(pos if frame_points is None else np.asarray(frame_points, np.float64),
-                        pos, par, headroom=frame_points is None)
+            pts = (pos if frame_points is None
+                   else np.asarray(frame_points, np.float64).reshape(-1, 3))
+            if reach is not None:  # the sphere's six extremes
+                extremes = pos[0] + reach * np.concatenate([np.eye(3), -np.eye(3)])
+                pts = np.concatenate([pts, extremes])
+            self._frame(pts, pos, par, headroom=frame_points is None and reach is None,
+                        sphere=reach is not None)
         s = self._scale
         points = pv.PolyData(pos.copy())
         bones = pv.PolyData()
@@ -272,24 +288,30 @@ class SkeletonScene:
         return skel
 
     def _frame(self, points: Array, pose: Array, parents: NDArray[np.intp],
-               headroom: bool) -> None:
+               headroom: bool, sphere: bool) -> None:
         """Size the glyphs from ``pose``; place the floor and camera to cover ``points``
-        (with ``headroom``, also a pose whose limbs swing out further)."""
+        (with ``headroom``, also a pose whose limbs swing out further; with ``sphere``, the
+        bounding sphere, seen the same from every side)."""
         pts = points.reshape(-1, 3)
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         bone = np.linalg.norm(pose[1:] - pose[parents[1:]], axis=1)
         self._scale = float(max(np.ptp(pose, axis=0).max(), 2.5 * bone.max(initial=0.0), 1e-6))
         self._center = (lo + hi) / 2
-        # the bounding sphere about the box centre: a sphere of reach is framed as a sphere
         self._radius = float(max(np.linalg.norm(pts - self._center, axis=1).max(),
                                  (0.65 if headroom else 0.5) * self._scale))
+        # a clip is framed by what each view sees of it (subsampled): a walk seen from the
+        # front is one person, not a 20 m sphere
+        self._sphere = sphere
+        self._fit_points = None if sphere else pts[:: max(1, len(pts) // 4000)]
+        if headroom:
+            self._fit_points = None
         if self._ground_wanted:
             self._add_ground(lo, hi)
         self.set_camera(self._camera)
 
     def _add_ground(self, lo: Array, hi: Array) -> None:
         """A checkered floor under the points, tiles of a round size, y = lowest point."""
-        span = max(hi[0] - lo[0], hi[2] - lo[2]) + 1.5 * self._scale
+        span = 1.6 * max(hi[0] - lo[0], hi[2] - lo[2]) + 2.0 * self._scale  # a wide view too
         tile = 10.0 ** np.floor(np.log10(self._scale / 4))  # 1, 10, 100 ... per tile
         tile *= 5 if span / (5 * tile) > 8 else 1
         n = int(np.ceil(span / tile)) + 1
@@ -387,6 +409,23 @@ class SkeletonScene:
         if render:
             self.render()
 
+    def add_target_handle(self, position: ArrayLike, on_drag: Callable[[Array], None]) -> Any:
+        """A sphere at ``position (3,)`` that the student drags with the mouse in an interactive
+        view (trame; a static image has no mouse): ``on_drag(p)`` gets each new centre
+        ``p (3,)`` while it moves. Returns the VTK widget (see :meth:`move_target_handle`)."""
+        p = _as_positions(np.reshape(position, (1, 3)), 1, "position")[0]
+        self._handle = self.plotter.add_sphere_widget(
+            lambda center: on_drag(np.asarray(center, dtype=np.float64)), center=tuple(p),
+            radius=0.045 * self._scale, color=TARGET_COLOR, selected_color="#ff8a8e",
+            interaction_event="always",
+        )
+        return self._handle
+
+    def move_target_handle(self, position: ArrayLike) -> None:
+        """Put the drag handle (if any) at ``position (3,)``, e.g. after a slider moved it."""
+        if self._handle is not None:
+            self._handle.SetCenter(*np.asarray(position, dtype=np.float64).reshape(3))
+
     @property
     def target_positions(self) -> Array:
         """The drawn target markers ``(K, 3)`` (empty when none)."""
@@ -458,8 +497,12 @@ class SkeletonScene:
         d = np.asarray(direction) / np.linalg.norm(direction)
         camera = self.plotter.camera
         camera.view_angle = 30.0
-        distance = 1.05 * self._radius / np.tan(np.radians(15.0))
+        # a sphere of reach, with a margin; a lone pose's headroom is margin enough
+        distance = self._radius * (1.15 / np.sin(np.radians(15.0)) if self._sphere
+                                   else 1.05 / np.tan(np.radians(15.0)))
         focal = self._center
+        if self._fit_points is not None:
+            focal, distance = self._fit_view(d, np.asarray(up, dtype=np.float64))
         if preset == "follow" and self.skeletons:
             root = self.skeleton().positions[0]
             focal = np.array([root[0], self._center[1], root[2]])
@@ -475,6 +518,24 @@ class SkeletonScene:
         self._camera = preset
         if render:
             self.render()
+
+    def _fit_view(self, d: Array, up: Array) -> tuple[Array, float]:
+        """Focal point and distance along ``d`` at which every framing point, with its joint
+        sphere, is in view (perspective, 30 degrees vertically, the window's aspect, a 10%
+        margin)."""
+        right = np.cross(up, d)
+        right /= np.linalg.norm(right)
+        true_up = np.cross(d, right)
+        rel = self._fit_points - self._center
+        x, y, z = rel @ right, rel @ true_up, rel @ d  # z: towards the camera
+        focal = self._center + right * (x.max() + x.min()) / 2 + true_up * (y.max() + y.min()) / 2
+        pad = 0.03 * self._scale  # a joint sphere's radius and a little more
+        x = np.abs(x - (x.max() + x.min()) / 2) + pad
+        y = np.abs(y - (y.max() + y.min()) / 2) + pad
+        w, h = self.plotter.window_size
+        tan_v = np.tan(np.radians(15.0)) / 1.1
+        tan_h = tan_v * w / h
+        return focal, float(max((z + pad + y / tan_v).max(), (z + pad + x / tan_h).max(), 1e-6))
 
     def _follow_root(self, root: Array) -> None:
         name, last = self._follow
