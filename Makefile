@@ -37,15 +37,21 @@ $(STAMP): pyproject.toml
 	@$(PY) -m pip install --quiet -e '.[dev]' >> $(VENV)/install.log 2>&1 || (cat $(VENV)/install.log; exit 1)
 	@touch $@
 
-# pip's VTK wheel needs libGL/libEGL; a bare Debian lacks them. Install them when we can
-# (root with apt-get), otherwise say what is missing.
+# pip's VTK wheel needs libGL.so.1 and libEGL.so.1; a bare Debian lacks them. When either is
+# missing, install both when we can (root with apt-get), otherwise say what is missing.
 sysdeps:
-	@if command -v ldconfig >/dev/null 2>&1 && ! ldconfig -p | grep -q 'libEGL.so.1'; then \
-	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-	    echo "Installing libgl1 libegl1 for off-screen 3D rendering..."; \
-	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libgl1 libegl1 >/dev/null; \
-	  else \
-	    echo "warning: libEGL.so.1 not found; 3D views need: apt-get install libgl1 libegl1"; \
+	@if command -v ldconfig >/dev/null 2>&1; then \
+	  missing=""; \
+	  for lib in libGL.so.1 libEGL.so.1; do \
+	    ldconfig -p | awk '{print $$1}' | grep -qxF "$$lib" || missing="$$missing $$lib"; \
+	  done; \
+	  if [ -n "$$missing" ]; then \
+	    if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	      echo "Installing libgl1 libegl1 for off-screen 3D rendering (missing:$$missing)..."; \
+	      apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libgl1 libegl1 >/dev/null; \
+	    else \
+	      echo "warning:$$missing not found; 3D views need: apt-get install libgl1 libegl1"; \
+	    fi; \
 	  fi; \
 	fi
 

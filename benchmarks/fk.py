@@ -13,8 +13,9 @@ Sites dropped), the clip read from $COURSE_DATA_DIR or ../shared/data/bvh. Figur
   separate contiguous (J, F) arrays), one joint at a time, plain elementwise numpy on (F,)
   arrays; the goal is library / baseline <= 1.5;
 - frame-major: one joint at a time on (F, 4) slices of frame-major arrays;
-- naive: a Python loop over frames and joints with the public quaternion functions, timed on
-  a subset of frames and extrapolated linearly.
+- naive: what a first attempt looks like, a Python loop over frames and joints with plain
+  numpy quaternion maths on (4,) and (3,) arrays, timed on a subset of frames and
+  extrapolated linearly.
 
 All timings are the best of ``--repeats`` runs of ``time.perf_counter``.
 """
@@ -29,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
+from course.bvh import load_bvh
 from course.fk import forward_kinematics
-from course.rotations import quat_mul, quat_rotate
 from course.rotations.quaternion import _mul, _rotate
 
 REPO = Path(__file__).resolve().parents[1]
@@ -39,48 +40,14 @@ REPO = Path(__file__).resolve().parents[1]
 def walk_skeleton() -> tuple[list[str], np.ndarray, np.ndarray]:
     """Names, parents and offsets of the CMU walk's 31 joints (End Sites dropped)."""
     folder = Path(os.environ.get("COURSE_DATA_DIR", REPO.parent / "shared" / "data" / "bvh"))
-    path = folder / "cmu_12_01_walk.bvh"
-    try:
-        from course.bvh import load_bvh
-    except ImportError:  # course.bvh not written yet: read the HIERARCHY section directly
-        names, parents, offsets = _read_hierarchy(path)
-    else:
-        skeleton = load_bvh(path).skeleton
-        names, parents, offsets = list(skeleton.names), skeleton.parents, skeleton.offsets
-    keep = [j for j, name in enumerate(names) if not name.endswith("_end")]
+    skeleton = load_bvh(folder / "cmu_12_01_walk.bvh").skeleton
+    keep = [j for j, name in enumerate(skeleton.names) if not name.endswith("_end")]
     new = {old: new for new, old in enumerate(keep)}
     return (
-        [names[j] for j in keep],
-        np.array([new.get(int(parents[j]), -1) for j in keep]),
-        np.asarray(offsets, dtype=float)[keep],
+        [skeleton.names[j] for j in keep],
+        np.array([new.get(int(skeleton.parents[j]), -1) for j in keep]),
+        skeleton.offsets[keep],
     )
-
-
-def _read_hierarchy(path: Path) -> tuple[list[str], list[int], list[list[float]]]:
-    # Just enough BVH for the benchmark: ROOT/JOINT/End Site names, braces and OFFSETs.
-    names: list[str] = []
-    parents: list[int] = []
-    offsets: list[list[float]] = []
-    stack: list[int] = []
-    pending = -1
-    for line in path.read_text().splitlines():
-        words = line.split()
-        if not words:
-            continue
-        if words[0] == "MOTION":
-            break
-        if words[0] in ("ROOT", "JOINT", "End"):
-            name = words[1] if words[0] != "End" else f"{names[stack[-1]]}_end"
-            parents.append(stack[-1] if stack else -1)
-            names.append(name)
-            pending = len(names) - 1
-        elif words[0] == "{":
-            stack.append(pending)
-        elif words[0] == "}":
-            stack.pop()
-        elif words[0] == "OFFSET":
-            offsets.append([float(w) for w in words[1:4]])
-    return names, parents, offsets
 
 
 def random_pose(n_frames: int, n_joints: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -129,16 +96,28 @@ def frame_major(parents, offsets, R, root_position):
     return P, Q
 
 
+def naive_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product of two (4,) quaternions, written from the formula."""
+    wa, va, wb, vb = a[0], a[1:], b[0], b[1:]
+    return np.concatenate([[wa * wb - va @ vb], wa * vb + wb * va + np.cross(va, vb)])
+
+
+def naive_rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """q v q* of a unit (4,) quaternion and a (3,) vector."""
+    return naive_mul(naive_mul(q, np.concatenate([[0.0], v])), q * [1, -1, -1, -1])[1:]
+
+
 def naive(parents, offsets, R, root_position):
-    """What a first attempt looks like: loop over frames, then joints."""
+    """What a first attempt looks like: loop over frames, then joints, one quaternion at a
+    time (no input checks, no library calls)."""
     Q = np.empty_like(R)
     P = np.empty(R.shape[:-1] + (3,))
     for f in range(len(R)):
         Q[f, 0], P[f, 0] = R[f, 0], root_position[f]
         for j in range(1, len(parents)):
             p = parents[j]
-            Q[f, j] = quat_mul(Q[f, p], R[f, j])
-            P[f, j] = P[f, p] + quat_rotate(Q[f, p], offsets[j])
+            Q[f, j] = naive_mul(Q[f, p], R[f, j])
+            P[f, j] = P[f, p] + naive_rotate(Q[f, p], offsets[j])
     return P, Q
 
 
@@ -174,6 +153,7 @@ def main() -> None:
     assert np.allclose(P, np.stack([np.stack(p, -1) for p in Pb], 1), atol=1e-9)
     assert np.allclose(Q, np.stack([np.stack(q, -1) for q in Qb], 1), atol=1e-12)
     assert np.allclose(P, P_fm, atol=1e-9) and np.allclose(P[:n], P_nv, atol=1e-9)
+    assert np.allclose(Q, Q_fm, atol=1e-12) and np.allclose(Q[:n], Q_nv, atol=1e-12)
 
     r = args.repeats
     t_base = best_of(lambda: baseline(parents_list, offsets, *components, root_T), r)

@@ -12,10 +12,12 @@ A BVH file has two parts::
     }
 
 Every joint becomes a joint of the :class:`~course.skeleton.Skeleton`, End Sites too (named
-``"<Parent>_end"``, no channels). Angles are in degrees in the file; a joint's rotation
-channels compose *intrinsically* in file order, so ``Zrotation Yrotation Xrotation`` is the
-Euler order ``"ZYX"``, :math:`R = R_Z(\alpha) R_Y(\beta) R_X(\gamma)`. A position channel
-replaces that axis of the joint's OFFSET (for the root: its position).
+``"<Parent>_end"``, no channels), with the joint type its rotation channels allow (see
+:func:`joint_type`: three make a ball joint, two a universal joint, one a hinge, none a fixed
+joint), so ``skeleton.dof`` counts the rotation channels. Angles are in degrees in the file;
+a joint's rotation channels compose *intrinsically* in file order, so ``Zrotation Yrotation
+Xrotation`` is the Euler order ``"ZYX"``, :math:`R = R_Z(\alpha) R_Y(\beta) R_X(\gamma)`. A
+position channel replaces that axis of the joint's OFFSET (for the root: its position).
 
 The reader accepts what real exporters write (CRLF or mixed line endings, tabs, blank lines,
 no final newline, ``.0083333``, leaf joints without End Site, ``Frame Time:`` spacing) and
@@ -43,7 +45,7 @@ from .motion import (
     rotation_axes,
 )
 from .rotations import euler_from_quat, quat_from_euler, quat_identity
-from .skeleton import Ball, Fixed, Skeleton
+from .skeleton import Ball, Fixed, Hinge, JointType, Skeleton, Universal
 
 Array = NDArray[np.float64]
 
@@ -52,6 +54,7 @@ __all__ = [
     "BVHWarning",
     "format_bvh",
     "format_bvh_channels",
+    "joint_type",
     "load_bvh",
     "parse_bvh",
     "save_bvh",
@@ -110,6 +113,7 @@ def load_bvh(path: str | os.PathLike[str]) -> Motion:
         root's position channels (an axis without a channel keeps the root's OFFSET);
         ``translations`` is set only if a non-root joint has position channels (see
         :class:`~course.motion.Motion`). ``name`` is the file stem, ``source`` the path.
+        The skeleton's joint types follow the rotation channels (:func:`joint_type`).
 
     Raises
     ------
@@ -117,6 +121,12 @@ def load_bvh(path: str | os.PathLike[str]) -> Motion:
         If the file is malformed (the message names the file and line).
     OSError
         If the file cannot be read.
+
+    Warns
+    -----
+    BVHWarning
+        For a quirk the reader worked around (more frame lines than ``Frames:`` declares: the
+        declared count is loaded); the warning points at the line that called ``load_bvh``.
     """
     path = Path(path)
     raw = path.read_bytes()
@@ -124,7 +134,9 @@ def load_bvh(path: str | os.PathLike[str]) -> Motion:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:  # joint names from old Windows exporters
         text = raw.decode("latin-1")
-    return parse_bvh(text, source=str(path), name=path.stem)
+    motion, quirks = _parse(text, str(path), path.stem)
+    _warn(quirks)
+    return motion
 
 
 def parse_bvh(text: str, source: str = "<string>", name: str = "") -> Motion:
@@ -139,18 +151,32 @@ def parse_bvh(text: str, source: str = "<string>", name: str = "") -> Motion:
     name : str
         ``Motion.name``.
     """
+    motion, quirks = _parse(text, source, name)
+    _warn(quirks)
+    return motion
+
+
+def _warn(quirks: Sequence[str]) -> None:
+    # stacklevel 3: past this helper and the public function, at the line that called it.
+    for quirk in quirks:
+        warnings.warn(quirk, BVHWarning, stacklevel=3)
+
+
+def _parse(text: str, source: str, name: str) -> tuple[Motion, list[str]]:
+    """The motion, and the quirks worked around (warning messages, left to the caller so that
+    the warning points at user code)."""
+    quirks: list[str] = []
     lines = text.splitlines()  # \n, \r\n and \r alike, even mixed; keeps a last unterminated line
     joints, motion_at = _parse_hierarchy(lines, source)
     n_frames, frame_time, data_at = _parse_motion_header(lines, motion_at, source)
     channels = tuple(j.channels for j in joints)
     n_channels = sum(len(c) for c in channels)
-    values = _parse_frames(lines, data_at, n_frames, n_channels, source)
+    values = _parse_frames(lines, data_at, n_frames, n_channels, source, quirks)
     offsets = np.array([j.offset for j in joints], dtype=np.float64)
-    # A joint rotates (3 DoF) when it has rotation channels; End Sites have none.
-    types = [Ball() if set(j.channels) & set(ROTATION_CHANNELS) else Fixed() for j in joints]
+    types = [joint_type(j.channels) for j in joints]
     skeleton = Skeleton([j.name for j in joints], [j.parent for j in joints], offsets, types)
     rotations, root_positions, translations = _pose_from_channels(values, channels, offsets)
-    return Motion(
+    motion = Motion(
         skeleton=skeleton,
         local_rotations=rotations,
         root_positions=root_positions,
@@ -160,6 +186,29 @@ def parse_bvh(text: str, source: str = "<string>", name: str = "") -> Motion:
         name=name,
         source=source,
     )
+    return motion, quirks
+
+
+_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+
+
+def joint_type(channels: Sequence[str]) -> JointType:
+    """The joint type a BVH joint's rotation channels allow (position channels do not count).
+
+    None: :class:`~course.skeleton.Fixed` (End Sites too); one, e.g. ``Xrotation``: a
+    :class:`~course.skeleton.Hinge` about that axis; two, e.g. ``Zrotation Xrotation``: a
+    :class:`~course.skeleton.Universal` joint turning about them in file order
+    (:math:`R = R_Z R_X`); three: a :class:`~course.skeleton.Ball`. The axes are those of
+    the parent's frame, where BVH rotation channels act.
+    """
+    axes = rotation_axes(channels)
+    if not axes:
+        return Fixed()
+    if len(axes) == 1:
+        return Hinge(_AXES[axes])
+    if len(axes) == 2:
+        return Universal((_AXES[axes[0]], _AXES[axes[1]]))
+    return Ball()
 
 
 @dataclass
@@ -379,9 +428,10 @@ def _parse_motion_header(
 
 
 def _parse_frames(
-    lines: Sequence[str], data_at: int, n_frames: int, n_channels: int, source: str
+    lines: Sequence[str], data_at: int, n_frames: int, n_channels: int, source: str,
+    quirks: list[str],
 ) -> Array:
-    """The motion block as an (F, C) array.
+    """The motion block as an (F, C) array; a surplus of frame lines is noted in ``quirks``.
 
     The fast path hands the frame lines to numpy's C parser in one call; only when that fails
     are the lines split in Python to find the first bad one and report its line number.
@@ -398,11 +448,9 @@ def _parse_frames(
             len(lines),
         )
     if len(numbered) > n_frames:
-        warnings.warn(
+        quirks.append(
             f"{source}: more frame lines than declared: Frames: says {n_frames}, the file has "
-            f"{len(numbered)}; loading the first {n_frames}",
-            BVHWarning,
-            stacklevel=3,
+            f"{len(numbered)}; loading the first {n_frames}"
         )
     rows = [tail[i] for i in numbered[:n_frames]]
     line_numbers = [data_at + 1 + i for i in numbered[:n_frames]]  # 1-based

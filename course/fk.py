@@ -35,7 +35,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .rotations._checks import as_array
+from .rotations._checks import as_array, broadcast_leading
 from .rotations.quaternion import _mul
 
 Array = NDArray[np.float64]
@@ -464,15 +464,10 @@ def forward_kinematics(
         q0 = as_array(root_orientation, "root_orientation", (4,))
         _check_unit(q0[..., None, :], "root_orientation", names, joint=root)
 
-    shapes = [R.shape[:-2], p0.shape[:-1], L.shape[:-2]] + ([] if q0 is None else [q0.shape[:-1]])
-    try:
-        batch = np.broadcast_shapes(*shapes)
-    except ValueError:
-        raise ValueError(
-            "forward_kinematics: leading (frame) shapes do not broadcast: local_rotations "
-            f"{R.shape}, root_position {p0.shape}, offsets {L.shape}"
-            + ("" if q0 is None else f", root_orientation {q0.shape}")
-        ) from None
+    args = [("local_rotations", R, 2), ("root_position", p0, 1), ("offsets", L, 2)]
+    batch = broadcast_leading(
+        "forward_kinematics", *args, *([] if q0 is None else [("root_orientation", q0, 1)])
+    )
     F = int(np.prod(batch))
 
     def frames(a: Array, tail: tuple[int, ...]) -> Array:

@@ -12,10 +12,18 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from course.bvh import BVHWarning, format_bvh, format_bvh_channels, load_bvh, parse_bvh, save_bvh
+from course.bvh import (
+    BVHWarning,
+    format_bvh,
+    format_bvh_channels,
+    joint_type,
+    load_bvh,
+    parse_bvh,
+    save_bvh,
+)
 from course.motion import Motion
-from course.rotations import matrix_from_quat
-from course.skeleton import Skeleton
+from course.rotations import matrix_from_quat, quat_from_axis_angle
+from course.skeleton import Ball, Fixed, Hinge, Skeleton, Universal
 
 # file (relative to the shared folder): joints, End Sites, channels, frames, frame time
 EXPECTED = {
@@ -309,11 +317,95 @@ def test_partial_channels_positions_below_root_and_no_channels(tmp_path):
 
 def test_more_frame_lines_than_declared_warns_and_loads_the_declared_count(tmp_path):
     file = tmp_path / "extra.bvh"
-    file.write_text(BASE.replace("Frames: 3", "Frames: 2"))
-    with pytest.warns(BVHWarning, match=r"extra\.bvh.*Frames: says 2, the file has 3"):
+    text = BASE.replace("Frames: 3", "Frames: 2")
+    file.write_text(text)
+    with pytest.warns(BVHWarning, match=r"extra\.bvh.*Frames: says 2, the file has 3") as caught:
         motion = load_bvh(file)
     assert motion.n_frames == 2
     assert np.allclose(motion.root_positions[-1], [4, 5, 6])
+    # The warning points at the line that called load_bvh (here), not inside course/bvh.py.
+    assert [Path(w.filename).name for w in caught] == [Path(__file__).name]
+    with pytest.warns(BVHWarning, match="Frames: says 2") as caught:
+        parse_bvh(text, source="extra")
+    assert [Path(w.filename).name for w in caught] == [Path(__file__).name]
+
+
+# One joint for each number of rotation channels: a ball root, a 1-channel hinge (knee), a
+# 2-channel universal joint (wrist) turning about Z then X, and a joint with positions only.
+JOINT_TYPES = """HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Yrotation Xrotation Zrotation
+  JOINT Knee
+  {
+    OFFSET 0 -4 0
+    CHANNELS 1 Xrotation
+    JOINT Wrist
+    {
+      OFFSET 0 -4 0
+      CHANNELS 2 Zrotation Xrotation
+      JOINT Slide
+      {
+        OFFSET 1 0 0
+        CHANNELS 3 Xposition Yposition Zposition
+        End Site
+        {
+          OFFSET 0 0 1
+        }
+      }
+    }
+  }
+}
+MOTION
+Frames: 2
+Frame Time: 0.1
+0 1 2 10 20 30 45 30 -60 1 0.5 0
+3 4 5 -10 -20 -30 -90 120 15 2 0 0.25
+"""
+
+
+def test_joint_types_follow_the_rotation_channels(tmp_path):
+    file = tmp_path / "types.bvh"
+    file.write_text(JOINT_TYPES)
+    motion = load_bvh(file)
+    skeleton = motion.skeleton
+    X, Y, Z = np.eye(3)
+    assert skeleton.joint_types == (
+        Ball(), Hinge(tuple(X)), Universal((tuple(Z), tuple(X))), Fixed(), Fixed()
+    )
+    # Every rotation channel is one rotational degree of freedom: 3 + 1 + 2 + 0 + 0.
+    assert skeleton.dof == 6 == sum(c.endswith("rotation") for cs in motion.channels for c in cs)
+    # The hinge turns about its axis, the universal joint about Z then X (R = R_Z R_X).
+    knee = quat_from_axis_angle(X, [45, -90], degrees=True)
+    assert np.allclose(motion.local_rotations[:, 1], knee, atol=1e-15)
+    expected = Rotation.from_euler("ZX", [[30, -60], [120, 15]], degrees=True).as_matrix()
+    assert np.allclose(matrix_from_quat(motion.local_rotations[:, 2]), expected, atol=1e-12)
+    positions, orientations = motion.forward_kinematics()
+    ref_positions, ref_matrices = reference_fk(JOINT_TYPES, [0, 1])
+    assert np.allclose(positions, ref_positions, atol=1e-12)
+    assert np.allclose(matrix_from_quat(orientations), ref_matrices, atol=1e-12)
+    # Written and read back, the joints keep their channels and so their types.
+    again = parse_bvh(format_bvh(motion))
+    assert again.skeleton.joint_types == skeleton.joint_types
+    assert_same_fk(motion, again, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("channels", "expected"),
+    [
+        ((), Fixed()),
+        (("Xposition", "Yposition", "Zposition"), Fixed()),
+        (("Yrotation",), Hinge((0.0, 1.0, 0.0))),
+        (("Zposition", "Zrotation"), Hinge((0.0, 0.0, 1.0))),
+        (("Yrotation", "Xposition", "Zrotation"), Universal(((0, 1, 0), (0, 0, 1)))),
+        (("Xrotation", "Yrotation"), Universal(((1, 0, 0), (0, 1, 0)))),
+        (("Xrotation", "Zrotation", "Yrotation"), Ball()),
+    ],
+)
+def test_joint_type_of_channels(channels, expected):
+    assert joint_type(channels) == expected
+    assert joint_type(channels).dof == sum(c.endswith("rotation") for c in channels)
 
 
 def test_no_frames():

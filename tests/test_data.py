@@ -10,11 +10,13 @@ import dataclasses
 import functools
 import hashlib
 import http.server
+import logging
 import threading
 import time
 from pathlib import Path
 
 import numpy as np
+import pooch
 import pytest
 
 from course import data
@@ -56,6 +58,25 @@ def point_url(monkeypatch, name: str, url: str) -> None:
 
 def sha256(file: Path) -> str:
     return hashlib.sha256(file.read_bytes()).hexdigest()
+
+
+@pytest.fixture
+def pooch_records():
+    """Every record pooch's logger emits during the test (at any level), and its level is
+    checked to be restored afterwards."""
+    logger = pooch.get_logger()
+    level = logger.level
+    records: list[logging.LogRecord] = []
+    handler = logging.Handler(logging.DEBUG)
+    handler.emit = records.append
+    logger.addHandler(handler)
+    yield records
+    logger.removeHandler(handler)
+    assert logger.level == level
+
+
+def no_network(*args, **kwargs):
+    raise AssertionError("no download was expected")
 
 
 # -- the package's own sample --------------------------------------------------------------
@@ -161,8 +182,8 @@ def test_corrupted_mirror_copy_is_refused(shared_bvh_dir, empty_dirs, monkeypatc
     assert data.CLIPS[WALK].sha256 in message
 
 
-def test_no_network_and_no_copy(empty_dirs, monkeypatch):
-    _, cache = empty_dirs
+def test_no_network_and_no_copy(empty_dirs, monkeypatch, pooch_records):
+    mirror, cache = empty_dirs
     url = REFUSED + "cmu_12_01_walk.bvh"
     point_url(monkeypatch, WALK, url)
     start = time.perf_counter()
@@ -170,17 +191,29 @@ def test_no_network_and_no_copy(empty_dirs, monkeypatch):
         data.load(WALK)
     assert time.perf_counter() - start < 5
     message = str(caught.value)
-    for part in ("cmu_12_01_walk.bvh", url, str(cache / "cmu_12_01_walk.bvh"), "COURSE_DATA_DIR"):
+    # The file, its pinned URL, where to save it, where we looked and the two variables.
+    for part in ("cmu_12_01_walk.bvh", url, str(cache / "cmu_12_01_walk.bvh"), str(mirror),
+                 "COURSE_DATA_DIR", "COURSE_CACHE_DIR", "the download failed"):
         assert part in message
+    # The low-level error is chained, not pasted into the message.
+    assert caught.value.__cause__ is not None
+    for noise in ("Errno", "Max retries", "HTTPConnection", "urllib3", "refused"):
+        assert noise not in message
+    assert "refused" in str(caught.value.__cause__).lower()
+    assert pooch_records == []  # no "Downloading data from ..." before the error
     assert WALK not in data.available()
 
 
-def test_download_switched_off(empty_dirs):
-    with pytest.raises(data.DataUnavailableError, match="downloads are switched off"):
+def test_download_switched_off(empty_dirs, monkeypatch):
+    monkeypatch.setattr(store, "_download", no_network)
+    with pytest.raises(data.DataUnavailableError, match="downloads are switched off") as caught:
         data.path(WALK, download=False)
+    assert data.CLIPS[WALK].url in str(caught.value)
+    assert "COURSE_CACHE_DIR" in str(caught.value)
 
 
-def test_download_into_the_cache(shared_bvh_dir, empty_dirs, monkeypatch, tmp_path):
+def test_download_into_the_cache(shared_bvh_dir, empty_dirs, monkeypatch, tmp_path,
+                                 pooch_records):
     _, cache = empty_dirs
     served = tmp_path / "served"
     served.mkdir()
@@ -191,6 +224,7 @@ def test_download_into_the_cache(shared_bvh_dir, empty_dirs, monkeypatch, tmp_pa
         assert data.path(WALK) == cache / "cmu_12_01_walk.bvh"
     finally:
         stop()
+    assert pooch_records == []  # pooch kept quiet
     assert sha256(cache / "cmu_12_01_walk.bvh") == data.CLIPS[WALK].sha256
     # Offline from now on: the cached copy is used.
     point_url(monkeypatch, WALK, REFUSED + "cmu_12_01_walk.bvh")
@@ -224,10 +258,13 @@ def test_corrupted_cache_copy_is_not_used(shared_bvh_dir, empty_dirs, monkeypatc
         data.path(WALK)
 
 
-def test_excerpt_is_cut_from_01_03(shared_bvh_dir, empty_dirs):
+def test_excerpt_is_cut_from_01_03(shared_bvh_dir, empty_dirs, monkeypatch):
     mirror, cache = empty_dirs
     (mirror / "01_03.bvh").symlink_to(shared_bvh_dir / "01_03.bvh")
     assert data.available() == ["wave", "01_03", "01_03_reach_excerpt"]
+    # download=False forbids only the network: cutting from the local source is allowed,
+    # as available() promised.
+    monkeypatch.setattr(store, "_download", no_network)
     excerpt = data.path("01_03_reach_excerpt", download=False)
     assert excerpt == cache / "01_03_reach_excerpt.bvh"
     assert excerpt.read_bytes() == (shared_bvh_dir / "01_03_reach_excerpt.bvh").read_bytes()
@@ -243,3 +280,7 @@ def test_excerpt_without_its_source(empty_dirs, monkeypatch):
     point_url(monkeypatch, "01_03", REFUSED + "01_03.bvh")
     with pytest.raises(data.DataUnavailableError, match="reach_excerpt.bvh is cut from 01_03"):
         data.path("01_03_reach_excerpt")
+    monkeypatch.setattr(store, "_download", no_network)
+    with pytest.raises(data.DataUnavailableError, match="(?s)cut from 01_03.*switched off"):
+        data.path("01_03_reach_excerpt", download=False)
+    assert "01_03_reach_excerpt" not in data.available()

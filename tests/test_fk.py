@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from rotation_asserts import random_quats
 from scipy.spatial.transform import Rotation
 
 from course.fk import forward_kinematics, local_from_global
@@ -16,11 +17,6 @@ def random_tree(rng: np.random.Generator, n: int) -> tuple[list[int], np.ndarray
     offsets[rng.random(n) < 0.3, rng.integers(0, 3)] = 0.0  # bones with zero components
     offsets[rng.integers(1, n)] = 0.0  # a zero-length bone
     return parents, offsets
-
-
-def random_quats(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
-    q = Rotation.random(int(np.prod(shape)), rng=rng).as_quat(scalar_first=True)
-    return q.reshape(shape + (4,))
 
 
 def matrices(q: np.ndarray) -> np.ndarray:

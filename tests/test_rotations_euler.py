@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from course.rotations import (
     EULER_ORDERS,
+    GIMBAL_LOCK_TOL,
     PROPER_EULER_ORDERS,
     TAIT_BRYAN_ORDERS,
     euler_from_matrix,
@@ -111,12 +112,40 @@ def test_near_gimbal_lock_reproduces_the_matrix(order):
             angles[:, 1] = lock + delta
             R = matrix_from_euler(angles, order)
             got, locked = euler_from_matrix(R, order, return_gimbal_lock=True)
-            np.testing.assert_allclose(matrix_from_euler(got, order), R, atol=1e-9,
+            # Locked (only within GIMBAL_LOCK_TOL) costs at most twice the distance to lock.
+            np.testing.assert_allclose(matrix_from_euler(got, order), R, rtol=0,
+                                       atol=1e-14 + 2 * abs(delta) * locked.any(),
                                        err_msg=f"{order} middle angle {lock} + {delta}")
             if abs(delta) >= 1e-9:
                 assert not locked.any()
                 np.testing.assert_allclose(gimbal_lock_distance(got, order), abs(delta),
                                            rtol=1e-5)
+
+
+@pytest.mark.parametrize("order", EULER_ORDERS)
+def test_one_gimbal_lock_tolerance(order):
+    """euler_from_* and is_gimbal_lock (by default) call the same rotations locked: those
+    within GIMBAL_LOCK_TOL of lock, and no others."""
+    rng = _rng(order)
+    for lock in _lock_values(order):
+        for factor, expect in ((0.0, True), (0.5, True), (2.0, False), (1e3, False)):
+            for sign in (1.0, -1.0):
+                delta = sign * factor * GIMBAL_LOCK_TOL
+                angles = rng.uniform(-np.pi, np.pi, (50, 3))
+                angles[:, 1] = lock + delta
+                R = matrix_from_euler(angles, order)
+                got, locked = euler_from_matrix(R, order, return_gimbal_lock=True)
+                where = f"{order} middle angle {lock} + {delta:g}"
+                assert (locked == expect).all(), where
+                np.testing.assert_array_equal(is_gimbal_lock(got, order), locked, err_msg=where)
+                np.testing.assert_array_equal(is_gimbal_lock(angles, order), locked,
+                                              err_msg=where)
+                np.testing.assert_array_equal(
+                    is_gimbal_lock(np.degrees(got), order, degrees=True), locked, err_msg=where)
+                if expect:
+                    np.testing.assert_array_equal(got[:, 2], 0.0)
+                np.testing.assert_allclose(matrix_from_euler(got, order), R, rtol=0,
+                                           atol=1e-14 + 2 * abs(delta) * expect, err_msg=where)
 
 
 @pytest.mark.parametrize("order", ["XYZ", "zyx", "ZXZ", "yzy"])

@@ -88,6 +88,18 @@ def test_conjugate_and_inverse(rng):
     assert_same_rotation(quat_inverse(q), scipy_quat(scipy_rotation(q).inv(), (30,)))
 
 
+def test_algebra_takes_non_unit_quaternions(rng):
+    # The sandwich q (0, v) q* of the lecture rotates v: pure quaternions are fine.
+    q, v = random_quats(rng, (10,)), rng.normal(size=(10, 3))
+    pure = np.concatenate([np.zeros((10, 1)), v], axis=-1)
+    sandwich = quat_mul(quat_mul(q, pure), quat_conjugate(q))
+    np.testing.assert_allclose(sandwich[:, 0], 0, atol=1e-15)
+    np.testing.assert_allclose(sandwich[:, 1:], scipy_rotation(q).apply(v), atol=1e-14)
+    # A scaled quaternion keeps its length through the product, conjugate and sign choice.
+    np.testing.assert_allclose(quat_mul(3 * q, 2 * q), 6 * quat_mul(q, q), rtol=0, atol=1e-14)
+    np.testing.assert_array_equal(quat_canonical(-5 * q), 5 * quat_canonical(q))
+
+
 def test_normalize(rng):
     q = rng.normal(size=(10, 4)) * 7
     n = quat_normalize(q)
@@ -178,6 +190,18 @@ def test_quat_from_matrix_round_trip_batched(rng):
         (lambda: quat_rotate([1, 0, 0, 0], [1, 0]), r"^v: expected shape \(\.\.\., 3\)"),
         (lambda: matrix_from_quat([1, np.nan, 0, 0]), r"^q: contains NaN.*index \(1,\)"),
         (lambda: quat_canonical([1, 0, np.inf, 0]), r"^q: contains NaN or infinity"),
+        # The zero quaternion is refused everywhere, the algebra included.
+        (lambda: quat_mul([0, 0, 0, 0], [1, 0, 0, 0]), r"^a: has zero length; the zero quat"),
+        (lambda: quat_mul([1, 0, 0, 0], np.zeros((2, 4))), r"^b: has zero length at index \(0,\)"),
+        (lambda: quat_conjugate([[1, 0, 0, 0], [0, 0, 0, 0]]),
+         r"^q: has zero length at index \(1,\); the zero quaternion is no rotation"),
+        (lambda: quat_canonical(np.zeros(4)), r"^q: has zero length; the zero quaternion"),
+        # Shapes that do not broadcast: the function and both arguments with their shapes.
+        (lambda: quat_mul(np.ones((5, 4)), np.ones((3, 4))),
+         r"^quat_mul: a and b do not broadcast together: a has shape \(5, 4\) \(leading \(5,\)\), "
+         r"b has shape \(3, 4\) \(leading \(3,\)\); leading dimensions must be equal or 1$"),
+        (lambda: quat_rotate(np.ones((2, 4)), np.ones((3, 3))),
+         r"^quat_rotate: q and v do not broadcast together: q has shape \(2, 4\)"),
         (lambda: quat_mul("wxyz", [1, 0, 0, 0]), r"^a: expected numbers"),
         (lambda: quat_conjugate(None), r"^q: expected numbers, got None"),
         (lambda: quat_from_matrix(np.eye(4)), r"^R: expected shape \(\.\.\., 3, 3\)"),

@@ -51,7 +51,9 @@ def load(name: str, *, download: bool = True) -> Motion:
         ``"wave"`` (or ``"sample"``), ``"cmu_12_01_walk"``, ``"01_01"``, ``"01_03"``,
         ``"01_03_reach_excerpt"``.
     download : bool
-        Allow fetching a CMU clip that is not on this machine yet.
+        Allow fetching a CMU clip from the network when it is not on this machine yet. An
+        excerpt is cut from its source clip on this machine either way (see
+        :func:`~course.data.store.path`).
 
     Raises
     ------

@@ -5,8 +5,9 @@ Lookup order for a clip of :data:`~course.data.registry.CLIPS`:
 1. the local mirror: ``$COURSE_DATA_DIR``, else ``shared/data/bvh`` beside the checkout
    (where the course's developers and CI keep the clips);
 2. the user cache: ``$COURSE_CACHE_DIR``, else ``pooch.os_cache("course-kinematics")``;
-3. a download from the clip's pinned URL into the cache (or, for a derived clip, cutting it
-   from its source clip).
+3. a download from the clip's pinned URL into the cache, or, for a derived clip, cutting it
+   from its source clip (found by the same three steps) into the cache. Cutting is local
+   work, so it happens even with ``download=False``, which only forbids the network.
 
 Every file is checked against its SHA-256 before use; a mirror copy that fails the check is an
 error (never silently used or replaced).
@@ -81,7 +82,9 @@ def path(name: str, *, download: bool = True) -> Path:
     name : str
         One of :func:`names` (a ``.bvh`` suffix is ignored; ``"sample"`` means ``"wave"``).
     download : bool
-        Allow a download (or, for a derived clip, cutting it from its source).
+        Allow a download from the network. A derived clip is still cut from its source when
+        that is on this machine (as :func:`available` reports it); only a source that would
+        itself need a download is refused.
 
     Raises
     ------
@@ -90,7 +93,8 @@ def path(name: str, *, download: bool = True) -> Path:
     ChecksumError
         If a copy in the local mirror, or a download, does not have the pinned SHA-256.
     DataUnavailableError
-        If the clip is not here and cannot be downloaded; the message says where to put it.
+        If the clip is not here and cannot be downloaded; the message names the file, its
+        pinned URL and where to put it. A failed download is chained as ``__cause__``.
     """
     name = _resolve(name)
     if name in SAMPLES:
@@ -182,6 +186,11 @@ def _derive(clip: Clip, source: Path, target: Path) -> Path:
 def _download(clip: Clip, target: Path) -> Path:
     import pooch
 
+    # pooch logs "Downloading data from ..." at INFO level; a notebook should show only our
+    # outcome (a clip, or one clean error), so it is kept to warnings for this call.
+    logger = pooch.get_logger()
+    level = logger.level
+    logger.setLevel("WARNING")
     try:
         pooch.retrieve(
             clip.url,
@@ -193,7 +202,12 @@ def _download(clip: Clip, target: Path) -> Path:
     except ValueError as exc:  # pooch's hash mismatch; the bad download is already removed
         raise ChecksumError(f"download of {clip.url} failed its checksum: {exc}") from exc
     except Exception as exc:  # no network, HTTP error, unwritable cache, ...
-        raise DataUnavailableError(_how_to_get(clip, target, f"download failed ({exc})")) from exc
+        # The low-level error (DNS, refused connection, HTTP status) stays as __cause__.
+        raise DataUnavailableError(
+            _how_to_get(clip, target, f"the download failed ({type(exc).__name__})")
+        ) from exc
+    finally:
+        logger.setLevel(level)
     return target
 
 
@@ -212,7 +226,10 @@ def _write_checked(content: bytes, clip: Clip, target: Path) -> None:
 
 def _how_to_get(clip: Clip, target: Path, why: str) -> str:
     return (
-        f"{clip.filename} is not available: {why}. It is not in the local mirror "
-        f"{mirror_dir()} nor in the cache {target.parent}. Download {clip.url} and copy it "
-        f"to {target}, or set COURSE_DATA_DIR to a folder that holds it."
+        f"{clip.filename} is not on this machine and {why}.\n"
+        f"  Looked in the local mirror {mirror_dir()} (COURSE_DATA_DIR) and the cache "
+        f"{target.parent} (COURSE_CACHE_DIR).\n"
+        f"  To get it: download {clip.url}\n"
+        f"  and save it as {target}, or put it in a folder and set COURSE_DATA_DIR to that "
+        "folder."
     )

@@ -20,6 +20,7 @@ from .axis_angle import (
 )
 from .euler import (
     EULER_ORDERS,
+    GIMBAL_LOCK_TOL,
     PROPER_EULER_ORDERS,
     TAIT_BRYAN_ORDERS,
     euler_from_matrix,
@@ -46,6 +47,7 @@ from .vectors import quat_between, skew
 __all__ = [
     "DEFAULT_AXIS",
     "EULER_ORDERS",
+    "GIMBAL_LOCK_TOL",
     "PROPER_EULER_ORDERS",
     "TAIT_BRYAN_ORDERS",
     "axis_angle_from_matrix",

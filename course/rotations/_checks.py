@@ -33,11 +33,11 @@ def as_array(x: ArrayLike, name: str, last: tuple[int, ...] = ()) -> NDArray[np.
     if a.ndim < len(last) or a.shape[a.ndim - len(last):] != last:
         want = "(..., " + ", ".join(map(str, last)) + ")"
         raise ValueError(f"{name}: expected shape {want}, got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        bad = np.argwhere(~np.isfinite(a))[0]
-        raise ValueError(
-            f"{name}: contains NaN or infinity (first at index {tuple(int(i) for i in bad)})"
-        )
+    finite = np.isfinite(a)
+    if not finite.all():
+        if a.ndim == 0:
+            raise ValueError(f"{name}: is {float(a)}; expected a finite number")
+        raise ValueError(f"{name}: contains NaN or infinity (the first{_index(~finite)})")
     return a
 
 
@@ -46,6 +46,38 @@ def _index(mask: NDArray[np.bool_]) -> str:
     if np.ndim(mask) == 0:
         return ""
     return f" at index {tuple(int(i) for i in np.argwhere(mask)[0])}"
+
+
+def broadcast_leading(where: str, *args: tuple[str, NDArray[np.float64], int]) -> tuple[int, ...]:
+    """The broadcast of the arguments' leading shapes, each without its trailing axes.
+
+    Parameters
+    ----------
+    where : str
+        The function, named first in the message.
+    *args : (name, array, n_trailing)
+        Each argument's name, its (checked) array and how many trailing axes are its own
+        (1 for a quaternion (..., 4), 2 for a matrix (..., 3, 3), 0 for a scalar per item).
+
+    Raises
+    ------
+    ValueError
+        If the leading shapes do not broadcast; the message names every argument with its
+        shape, instead of numpy's anonymous "operands could not be broadcast".
+    """
+    leading = [a.shape[: a.ndim - n] for _, a, n in args]
+    try:
+        return np.broadcast_shapes(*leading)
+    except ValueError:
+        names = [name for name, _, _ in args]
+        listing = ", ".join(
+            f"{name} has shape {a.shape}" + (f" (leading {lead})" if n else "")
+            for (name, a, n), lead in zip(args, leading, strict=True)
+        )
+        raise ValueError(
+            f"{where}: {', '.join(names[:-1])} and {names[-1]} do not broadcast together: "
+            f"{listing}; leading dimensions must be equal or 1"
+        ) from None
 
 
 def nonzero_norm(
@@ -58,6 +90,17 @@ def nonzero_norm(
     if np.any(small):
         raise ValueError(f"{name}: has zero length{_index(small)}; {why}")
     return n
+
+
+ZERO_QUAT = "the zero quaternion is no rotation"
+
+
+def as_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``q`` checked by :func:`as_array` (shape (..., 4)) and refused if any is the zero
+    quaternion (norm below 1e-12), which no rotation has."""
+    a = as_array(q, name, (4,))
+    nonzero_norm(a, name, ZERO_QUAT)
+    return a
 
 
 def as_unit(

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_array, as_unit
+from ._checks import as_array, as_unit, broadcast_leading
 from .quaternion import _canonical, quat_from_matrix, quat_normalize
 from .vectors import _skew
 
@@ -61,10 +61,11 @@ def quat_from_axis_angle(axis: ArrayLike, angle: ArrayLike, degrees: bool = Fals
     Raises
     ------
     ValueError
-        If ``axis`` has zero length, or either argument has a bad shape or non-finite values.
+        If ``axis`` has zero length, either argument has a bad shape or non-finite values, or
+        their leading dimensions do not broadcast.
     """
-    u = as_unit(axis, "axis", why=_ZERO_AXIS)
-    theta = _radians(as_array(angle, "angle"), degrees)[..., None]
+    u, theta = _axis_and_angle("quat_from_axis_angle", axis, angle, degrees)
+    theta = theta[..., None]
     v = np.sin(theta / 2) * u
     w = np.broadcast_to(np.cos(theta / 2), v.shape[:-1] + (1,))
     return np.concatenate([w, v], -1)
@@ -127,11 +128,20 @@ def matrix_from_axis_angle(axis: ArrayLike, angle: ArrayLike, degrees: bool = Fa
     Raises
     ------
     ValueError
-        If ``axis`` has zero length, or either argument has a bad shape or non-finite values.
+        If ``axis`` has zero length, either argument has a bad shape or non-finite values, or
+        their leading dimensions do not broadcast.
     """
+    return _rodrigues(*_axis_and_angle("matrix_from_axis_angle", axis, angle, degrees))
+
+
+def _axis_and_angle(
+    where: str, axis: ArrayLike, angle: ArrayLike, degrees: bool
+) -> tuple[Array, Array]:
+    """Unit axes and angles in radians, checked to broadcast; errors name ``where``."""
     u = as_unit(axis, "axis", why=_ZERO_AXIS)
-    theta = _radians(as_array(angle, "angle"), degrees)
-    return _rodrigues(u, theta)
+    theta = as_array(angle, "angle")
+    broadcast_leading(where, ("axis", u, 1), ("angle", theta, 0))
+    return u, _radians(theta, degrees)
 
 
 def _rodrigues(u: Array, theta: Array) -> Array:

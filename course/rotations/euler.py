@@ -20,13 +20,18 @@ for the middle one.
 
 **Gimbal lock.** When the middle angle is :math:`\pm\pi/2` (Tait-Bryan) or :math:`0, \pi`
 (proper Euler), the first and third axes line up and only the sum or difference of the
-first and third angles is determined. ``euler_from_*`` then sets the **third** angle
-``angles[..., 2]`` to 0 and puts the whole turn into the first (the choice scipy makes), and
-reports it when asked (``return_gimbal_lock=True``); no warning is emitted. Away from lock,
-even :math:`10^{-7}` rad away, the angles are exact: they come from the quaternion by the
-method of Bernardes & Viollet (2022), which never divides by a small cosine.
-:func:`is_gimbal_lock` and :func:`gimbal_lock_distance` tell how close given angles are to
-lock, e.g. for a warning next to a slider.
+first and third angles is determined. Within :data:`GIMBAL_LOCK_TOL` (:math:`10^{-12}` rad) of
+lock, ``euler_from_*`` sets the **third** angle ``angles[..., 2]`` to 0 and puts the whole turn
+into the first (the choice scipy makes), and reports it when asked
+(``return_gimbal_lock=True``); no warning is emitted. The tolerance is far above the
+rounding noise of a rotation built exactly at lock (below :math:`10^{-15}` rad), and so small
+that the returned angles still reproduce the rotation to about :math:`2\cdot 10^{-12}`.
+Farther from lock, even :math:`10^{-9}` rad away, the angles are exact: they come from the
+quaternion by the method of Bernardes & Viollet (2022), which never divides by a small
+cosine. :func:`gimbal_lock_distance` tells how close given angles are to lock, and
+:func:`is_gimbal_lock` whether they are within a tolerance of it: by default the same
+:data:`GIMBAL_LOCK_TOL`, so it agrees with ``return_gimbal_lock``; a warning next to a slider
+passes its own, e.g. a few degrees.
 
 Angles are in radians unless ``degrees=True``. All functions broadcast over leading
 dimensions.
@@ -48,11 +53,11 @@ PROPER_EULER_ORDERS = ("XYX", "XZX", "YXY", "YZY", "ZXZ", "ZYZ")
 EULER_ORDERS = tuple(o for case in (str.upper, str.lower)
                      for o in map(case, TAIT_BRYAN_ORDERS + PROPER_EULER_ORDERS))
 
-# Middle angle within this of lock (radians): treated as locked, third angle set to 0. Kept
-# tiny so that the matrix is still reproduced to ~1e-10, yet far above the ~1e-16 rounding
-# noise of a matrix built exactly at lock.
-_LOCK_EPS = 1e-11
-_DEFAULT_LOCK_TOL = 1e-6
+#: Radians. A middle angle this close to lock counts as gimbal lock, in ``euler_from_*``
+#: (third angle set to 0) and by default in :func:`is_gimbal_lock`. Treating a rotation that
+#: is d from lock as locked moves it by at most 2d, so this stays tiny; a rotation built
+#: exactly at lock comes back within ~1e-15 of it, far inside.
+GIMBAL_LOCK_TOL = 1e-12
 
 
 def _parse_order(order: object) -> tuple[tuple[int, int, int], bool]:
@@ -186,7 +191,8 @@ def euler_from_quat(
         (Tait-Bryan) or :math:`[0, \pi]` (proper Euler). At gimbal lock the third angle is 0.
     locked : ndarray of bool, shape (...)
         Only with ``return_gimbal_lock=True``: where the middle angle was within
-        :math:`10^{-11}` rad of lock and the third angle was therefore set to 0.
+        :data:`GIMBAL_LOCK_TOL` of lock and the third angle was therefore set to 0 (the same
+        test as ``is_gimbal_lock(angles, order)``).
 
     Raises
     ------
@@ -218,7 +224,7 @@ def _euler_from_unit_quat(
     middle = 2.0 * np.arctan2(np.hypot(c, d), np.hypot(a, b))
     half_sum, half_diff = np.arctan2(b, a), np.arctan2(d, c)
     first, third = half_sum - half_diff, half_sum + half_diff
-    at_zero, at_pi = middle <= _LOCK_EPS, middle >= np.pi - _LOCK_EPS
+    at_zero, at_pi = middle <= GIMBAL_LOCK_TOL, middle >= np.pi - GIMBAL_LOCK_TOL
     locked = at_zero | at_pi
     # At lock only first + third (middle 0) or third - first (middle pi) is defined; zero the
     # angle that is returned last: the extrinsic third, or for intrinsic orders the first.
@@ -260,8 +266,8 @@ def euler_from_matrix(
     Returns
     -------
     angles : ndarray, shape (..., 3)
-        ``matrix_from_euler(angles, order)`` reproduces ``R`` (to ~1e-15, and to ~1e-10 at
-        gimbal lock).
+        ``matrix_from_euler(angles, order)`` reproduces ``R`` (to ~1e-15; within
+        :data:`GIMBAL_LOCK_TOL` of lock, to ~2e-12).
     locked : ndarray of bool, shape (...)
         Only with ``return_gimbal_lock=True``.
 
@@ -313,15 +319,16 @@ def is_gimbal_lock(
     degrees : bool
         ``angles`` (and ``tol``) are in degrees.
     tol : float, optional
-        In the unit of ``angles``; default 1e-6 rad (its equivalent in degrees). A slider
-        warning might use a few degrees, e.g. ``is_gimbal_lock(a, "ZYX", True, tol=5)``.
+        In the unit of ``angles``; default :data:`GIMBAL_LOCK_TOL` (its equivalent in degrees),
+        the tolerance at which ``euler_from_*`` treats a rotation as locked. A slider warning
+        might use a few degrees, e.g. ``is_gimbal_lock(a, "ZYX", True, tol=5)``.
 
     Returns
     -------
     ndarray of bool, shape (...)
     """
     if tol is None:
-        tol = np.degrees(_DEFAULT_LOCK_TOL) if degrees else _DEFAULT_LOCK_TOL
+        tol = np.degrees(GIMBAL_LOCK_TOL) if degrees else GIMBAL_LOCK_TOL
     elif not np.isfinite(tol) or tol < 0:
         raise ValueError(f"tol: must be a finite number >= 0, got {tol!r}")
     return gimbal_lock_distance(angles, order, degrees) <= tol

@@ -22,11 +22,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_array, as_unit
+from ._checks import ZERO_QUAT, as_array, as_unit, broadcast_leading
 
 Array = NDArray[np.float64]
-
-_ZERO_QUAT = "the zero quaternion is no rotation"
 
 
 def lerp(x0: ArrayLike, x1: ArrayLike, t: ArrayLike) -> Array:
@@ -46,21 +44,38 @@ def lerp(x0: ArrayLike, x1: ArrayLike, t: ArrayLike) -> Array:
     Returns
     -------
     ndarray, shape (..., n)
+
+    Raises
+    ------
+    ValueError
+        If an argument has a bad shape or non-finite values, or the leading dimensions of
+        ``x0``, ``x1`` and ``t`` do not broadcast.
     """
     x0 = as_array(x0, "x0")
     if x0.ndim == 0:
         raise ValueError("x0: expected shape (..., n), got a scalar")
     x1 = as_array(x1, "x1", x0.shape[-1:])
-    t = as_array(t, "t")[..., None]
+    t = as_array(t, "t")
+    broadcast_leading("lerp", ("x0", x0, 1), ("x1", x1, 1), ("t", t, 0))
+    t = t[..., None]
     return (1 - t) * x0 + t * x1
 
 
-def _shortest_pair(q0: ArrayLike, q1: ArrayLike) -> tuple[Array, Array]:
-    """Unit ``q0``, ``q1`` with ``q1`` negated where ``q0 . q1 < 0`` (shortest path)."""
-    q0 = as_unit(q0, "q0", 4, _ZERO_QUAT)
-    q1 = as_unit(q1, "q1", 4, _ZERO_QUAT)
+def _shortest_pair(
+    where: str, q0: ArrayLike, q1: ArrayLike, t: ArrayLike | None = None
+) -> tuple[Array, Array, Array | None]:
+    """Unit ``q0``, ``q1`` with ``q1`` negated where ``q0 . q1 < 0`` (shortest path), and ``t``
+    (with a trailing axis of 1), all checked to broadcast; errors name ``where``."""
+    q0 = as_unit(q0, "q0", 4, ZERO_QUAT)
+    q1 = as_unit(q1, "q1", 4, ZERO_QUAT)
+    args = [("q0", q0, 1), ("q1", q1, 1)]
+    if t is not None:
+        t = as_array(t, "t")
+        args.append(("t", t, 0))
+        t = t[..., None]
+    broadcast_leading(where, *args)
     flip = np.sum(q0 * q1, axis=-1, keepdims=True) < 0
-    return q0, np.where(flip, -q1, q1)
+    return q0, np.where(flip, -q1, q1), t
 
 
 def _half_sphere_angle(q0: Array, q1: Array) -> Array:
@@ -93,9 +108,15 @@ def nlerp(q0: ArrayLike, q1: ArrayLike, t: ArrayLike) -> Array:
     -------
     ndarray, shape (..., 4)
         Unit quaternions; ``q0`` at ``t = 0`` and ``q1`` (possibly as ``-q1``) at ``t = 1``.
+
+    Raises
+    ------
+    ValueError
+        If ``q0`` or ``q1`` is the zero quaternion, any argument has a bad shape or values,
+        or the leading dimensions of ``q0``, ``q1`` and ``t`` do not broadcast.
     """
-    q0, q1 = _shortest_pair(q0, q1)
-    q = lerp(q0, q1, t)
+    q0, q1, t = _shortest_pair("nlerp", q0, q1, t)
+    q = (1 - t) * q0 + t * q1
     # With q0 . q1 >= 0 the blend never passes through 0 (its norm is >= 1/sqrt(2) on [0, 1]).
     return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
@@ -133,10 +154,10 @@ def slerp(q0: ArrayLike, q1: ArrayLike, t: ArrayLike) -> Array:
     Raises
     ------
     ValueError
-        If ``q0`` or ``q1`` is the zero quaternion, or any argument has a bad shape or values.
+        If ``q0`` or ``q1`` is the zero quaternion, any argument has a bad shape or values,
+        or the leading dimensions of ``q0``, ``q1`` and ``t`` do not broadcast.
     """
-    q0, q1 = _shortest_pair(q0, q1)
-    t = as_array(t, "t")[..., None]
+    q0, q1, t = _shortest_pair("slerp", q0, q1, t)
     omega = _half_sphere_angle(q0, q1)[..., None]  # in [0, pi/2] after the flip
     q = ((1 - t) * _sinc((1 - t) * omega) * q0 + t * _sinc(t * omega) * q1) / _sinc(omega)
     return q / np.linalg.norm(q, axis=-1, keepdims=True)
@@ -158,4 +179,5 @@ def quat_angle(q0: ArrayLike, q1: ArrayLike) -> Array:
     -------
     ndarray, shape (...)
     """
-    return 2.0 * _half_sphere_angle(*_shortest_pair(q0, q1))
+    q0, q1, _ = _shortest_pair("quat_angle", q0, q1)
+    return 2.0 * _half_sphere_angle(q0, q1)

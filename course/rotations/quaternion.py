@@ -3,7 +3,16 @@ r"""Unit quaternions, scalar first.
 :math:`q = (w, x, y, z) = (\cos\frac\theta2, \sin\frac\theta2\,u)` for a turn by θ about u.
 A unit quaternion :math:`q` rotates a vector by :math:`v' = q\,v\,q^*` (active rotation,
 Hamilton product). :math:`q` and :math:`-q` are the same rotation; :func:`quat_canonical`
-picks the one with :math:`w \ge 0`. All functions broadcast over leading dimensions.
+picks the one with :math:`w \ge 0`. All functions broadcast over leading dimensions; shapes
+that do not broadcast are a ``ValueError`` naming the arguments.
+
+**Non-unit and zero quaternions.** :func:`quat_mul` and :func:`quat_conjugate` are the
+quaternion algebra and accept any length, e.g. the pure quaternion :math:`(0, v)` of the
+sandwich :math:`q\,(0, v)\,q^*`; the functions that read ``q`` as a rotation normalise it.
+None of them accepts the **zero quaternion** (norm below :math:`10^{-12}`): it is no rotation,
+has no inverse, and is nearly always an array that was never filled in, so it is a
+``ValueError`` naming the argument and the index, not a silent zero. (To rotate vectors, the
+zero vector included, use :func:`quat_rotate`.)
 """
 
 from __future__ import annotations
@@ -11,7 +20,14 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_array, as_rotation_matrix, nonzero_norm
+from ._checks import (
+    ZERO_QUAT,
+    as_array,
+    as_quat,
+    as_rotation_matrix,
+    broadcast_leading,
+    nonzero_norm,
+)
 
 Array = NDArray[np.float64]
 
@@ -34,14 +50,23 @@ def quat_mul(a: ArrayLike, b: ArrayLike) -> Array:
     Parameters
     ----------
     a, b : array_like, shape (..., 4)
-        Quaternions (w, x, y, z); leading dimensions broadcast.
+        Quaternions (w, x, y, z), unit or not (not normalised here); leading dimensions
+        broadcast.
 
     Returns
     -------
     ndarray, shape (..., 4)
+        Unit if ``a`` and ``b`` are.
+
+    Raises
+    ------
+    ValueError
+        If ``a`` or ``b`` is the zero quaternion, has a bad shape or non-finite values, or
+        their leading dimensions do not broadcast.
     """
-    a = as_array(a, "a", (4,))
-    b = as_array(b, "b", (4,))
+    a = as_quat(a, "a")
+    b = as_quat(b, "b")
+    broadcast_leading("quat_mul", ("a", a, 1), ("b", b, 1))
     return _mul(a, b)
 
 
@@ -61,9 +86,14 @@ def _mul(a: Array, b: Array) -> Array:
 
 
 def quat_conjugate(q: ArrayLike) -> Array:
-    r"""Conjugate :math:`q^* = (w, -x, -y, -z)`; the inverse rotation of a unit quaternion."""
-    q = as_array(q, "q", (4,))
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
+    r"""Conjugate :math:`q^* = (w, -x, -y, -z)`; the inverse rotation of a unit quaternion.
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is the zero quaternion, or has a bad shape or non-finite values.
+    """
+    return as_quat(q, "q") * np.array([1.0, -1.0, -1.0, -1.0])
 
 
 def quat_inverse(q: ArrayLike) -> Array:
@@ -75,8 +105,8 @@ def quat_inverse(q: ArrayLike) -> Array:
         If ``q`` is the zero quaternion.
     """
     q = as_array(q, "q", (4,))
-    n2 = nonzero_norm(q, "q", "the zero quaternion is no rotation") ** 2
-    return quat_conjugate(q) / n2[..., None]
+    n2 = nonzero_norm(q, "q", ZERO_QUAT) ** 2
+    return q * np.array([1.0, -1.0, -1.0, -1.0]) / n2[..., None]
 
 
 def quat_normalize(q: ArrayLike) -> Array:
@@ -88,7 +118,7 @@ def quat_normalize(q: ArrayLike) -> Array:
         If ``q`` is the zero quaternion, which is no rotation.
     """
     q = as_array(q, "q", (4,))
-    return q / nonzero_norm(q, "q", "the zero quaternion is no rotation")[..., None]
+    return q / nonzero_norm(q, "q", ZERO_QUAT)[..., None]
 
 
 def quat_canonical(q: ArrayLike) -> Array:
@@ -97,9 +127,16 @@ def quat_canonical(q: ArrayLike) -> Array:
     ``q`` and ``-q`` are the same rotation; this picks one deterministically so that
     quaternions can be compared entry by entry. A component with magnitude below 1e-15 counts
     as zero, so for half turns (``w`` = 0 up to rounding) the first non-zero of x, y, z is
-    made positive and the result is the same whichever sign the rounding gave ``w``.
+    made positive and the result is the same whichever sign the rounding gave ``w``. The
+    length of ``q`` is kept.
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is the zero quaternion (which has no sign to choose), or has a bad shape or
+        non-finite values.
     """
-    return _canonical(as_array(q, "q", (4,)))
+    return _canonical(as_quat(q, "q"))
 
 
 def _canonical(q: Array) -> Array:
@@ -121,13 +158,21 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     ----------
     q : array_like, shape (..., 4)
     v : array_like, shape (..., 3)
+        Leading dimensions broadcast against those of ``q``.
 
     Returns
     -------
     ndarray, shape (..., 3)
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is the zero quaternion, an argument has a bad shape or non-finite values, or
+        the leading dimensions do not broadcast.
     """
     q = quat_normalize(q)
     v = as_array(v, "v", (3,))
+    broadcast_leading("quat_rotate", ("q", q, 1), ("v", v, 1))
     return _rotate(q, v)
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._checks import as_array, as_unit
+from ._checks import as_array, as_unit, broadcast_leading
 
 Array = NDArray[np.float64]
 
@@ -84,10 +84,12 @@ def quat_between(u: ArrayLike, v: ArrayLike) -> Array:
     Raises
     ------
     ValueError
-        If ``u`` or ``v`` has zero length (or wrong shape, NaN, ...).
+        If ``u`` or ``v`` has zero length (or wrong shape, NaN, ...), or their leading
+        dimensions do not broadcast.
     """
     u = as_unit(u, "u", why="the rotation between two directions needs non-zero vectors")
     v = as_unit(v, "v", why="the rotation between two directions needs non-zero vectors")
+    broadcast_leading("quat_between", ("u", u, 1), ("v", v, 1))
     u, v = np.broadcast_arrays(u, v)
     s = u + v
     n = np.linalg.norm(s, axis=-1, keepdims=True)
