@@ -29,6 +29,7 @@ fixed in the parent's frame, :math:`a_i = Q_{parent} \hat a`).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -103,6 +104,12 @@ class ChainModel:
         self.reach_far = on_path @ lengths
         longest = (on_path * lengths).max(axis=1, initial=0.0)
         self.reach_near = np.maximum(0.0, 2 * longest - self.reach_far)
+        # Rounding slack of the reach test, relative to the longest path.
+        self.reach_slack = 1e-9 * max(float(self.reach_far.max(initial=0.0)), 1.0)
+        # The solve's length scale: its longest path to any effector (orientation targets
+        # included), floored so a chain of zero bones still has one.
+        to_any = self.descendant[:, np.concatenate([self.effectors, self.rot_effectors])].T
+        self.length_scale = max(float((to_any @ lengths).max(initial=0.0)), 1e-9)
         hinge_cols = self.hinge[self.col_var]
         self.hinge_vars = np.flatnonzero(self.hinge)
         self.ball_vars = np.flatnonzero(~self.hinge)
@@ -354,13 +361,17 @@ def build_model(
     )
 
 
+def outside_shell(d: Any, far: Any, near: Any, slack: float) -> Any:
+    """Whether distances ``d`` from the fixed joint lie outside the shell ``[near, far]`` an
+    effector can reach, give or take ``slack`` (floats or arrays)."""
+    return (d > far + slack) | (d < near - slack)
+
+
 def unreachable_targets(model: ChainModel, target_pos: Array, p0: Array) -> NDArray[np.bool_]:
     """(B,) some position target (B, E, 3) lies outside the shell its effector can reach from
     the fixed joint at ``p0`` (B, 3)."""
-    far, near = model.reach_far, model.reach_near
     d = norm(target_pos - p0[:, None])
-    slack = 1e-9 * max(float(far.max()), 1.0)
-    return ((d > far + slack) | (d < near - slack)).any(axis=1)
+    return outside_shell(d, model.reach_far, model.reach_near, model.reach_slack).any(axis=1)
 
 
 @dataclass
@@ -413,10 +424,6 @@ class Problem:
             e = np.concatenate([e, r], 1)
             size = np.concatenate([size, norm(r)], 1)
         return e.reshape(self.batch, -1), size.max(axis=1)
-
-    def reach(self) -> tuple[Array, Array]:
-        """Largest and smallest distance from the fixed joint each effector can be, (E,) each."""
-        return self.model.reach_far, self.model.reach_near
 
     def unreachable(self) -> NDArray[np.bool_]:
         """(B,) some position target lies outside the shell its effector can reach."""

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from ._chains import outside_shell
 from ._small import TINY
 from .jacobian import lost_rank
 from .result import History
@@ -45,8 +46,8 @@ Quat = tuple  # (w, x, y, z) of Scalars
 class _Floats:
     """Component operations for one problem in Python floats."""
 
-    sqrt, sin, cos, atan2 = (staticmethod(f) for f in (math.sqrt, math.sin, math.cos,
-                                                       math.atan2))
+    sqrt, sin, cos, atan2, dist = (staticmethod(f) for f in (math.sqrt, math.sin, math.cos,
+                                                             math.atan2, math.dist))
     abs = staticmethod(abs)
 
     @staticmethod
@@ -117,6 +118,12 @@ class _Arrays:
     sqrt, sin, cos, atan2, abs = (staticmethod(f) for f in (np.sqrt, np.sin, np.cos, np.arctan2,
                                                             np.abs))
     where, maximum, minimum = (staticmethod(f) for f in (np.where, np.maximum, np.minimum))
+
+    @staticmethod
+    def dist(a: Vec, b: Vec) -> np.ndarray:
+        """Distance between two points (components (B,) or floats)."""
+        x, y, z = a[0] - b[0], a[1] - b[1], a[2] - b[2]
+        return np.sqrt(x * x + y * y + z * z)
 
     @staticmethod
     def select(c: np.ndarray, a: Any, b: Any) -> Any:
@@ -227,6 +234,15 @@ def qrot(q: Quat, v: Vec) -> Vec:
             vz + w * tz + x * ty - y * tx)
 
 
+def unit_like(q: Quat, ref: Quat, ops: Any) -> Quat:
+    """``q`` normalised, with the sign of ``ref`` (``q`` and ``-q`` are one rotation: keeping
+    the starting quaternion's sign spares an animated solve its sign flips)."""
+    w, x, y, z = q
+    inv = 1.0 / ops.sqrt(w * w + x * x + y * y + z * z)
+    inv = ops.where(w * ref[0] + x * ref[1] + y * ref[2] + z * ref[3] < 0, -inv, inv)
+    return (w * inv, x * inv, y * inv, z * inv)
+
+
 def axis_turn(axis: Vec, angle: Scalar, ops: Any) -> Quat:
     """Turn by ``angle`` about the unit ``axis`` (a constant)."""
     s = ops.sin(0.5 * angle)
@@ -245,21 +261,26 @@ def arc_turn(u: Vec, v: Vec, ops: Any) -> Quat:
     r"""Shortest arc taking direction ``u`` onto ``v``: :math:`(\lVert u\rVert\lVert v\rVert +
     u\cdot v,\ u\times v)` normalised; a half turn about an axis perpendicular to ``u`` when
     they are opposite; the identity when either is shorter than ``TINY`` (as
-    :func:`course.ik._small.arc_matrix`)."""
+    :func:`course.ik._small.arc_matrix`). The two special cases are rare, so they are only
+    worked out when some problem needs them (FABRIK fits every bone with this)."""
     uu, vv = dot(u, u), dot(v, v)
     nn = ops.sqrt(uu * vv)
     w, (x, y, z) = nn + dot(u, v), cross(u, v)
-    # Opposite: turn about u x (the coordinate axis of u's smallest component), as arc_matrix.
-    ax, ay, az = ops.abs(u[0]), ops.abs(u[1]), ops.abs(u[2])
-    use_x = ops.both(ax <= ay, ax <= az)
-    use_y = ops.both(ops.invert(use_x), ay <= az)
-    px, py, pz = ops.select(use_x, (0.0, u[2], -u[1]),  # u x (1, 0, 0)
-                            ops.select(use_y, (-u[2], 0.0, u[0]), (u[1], -u[0], 0.0)))
     opposite = w <= TINY * nn
-    w, x, y, z = (ops.where(opposite, 0.0, w), ops.where(opposite, px, x),
-                  ops.where(opposite, py, y), ops.where(opposite, pz, z))
+    if ops.any(opposite):
+        # Turn about u x (the coordinate axis of u's smallest component), as arc_matrix.
+        ax, ay, az = ops.abs(u[0]), ops.abs(u[1]), ops.abs(u[2])
+        use_x = ops.both(ax <= ay, ax <= az)
+        use_y = ops.both(ops.invert(use_x), ay <= az)
+        px, py, pz = ops.select(use_x, (0.0, u[2], -u[1]),  # u x (1, 0, 0)
+                                ops.select(use_y, (-u[2], 0.0, u[0]), (u[1], -u[0], 0.0)))
+        w, x, y, z = (ops.where(opposite, 0.0, w), ops.where(opposite, px, x),
+                      ops.where(opposite, py, y), ops.where(opposite, pz, z))
     n = ops.sqrt(w * w + x * x + y * y + z * z)
     degenerate = ops.minimum(uu, vv) < TINY * TINY  # either vector (nearly) zero
+    if not ops.any(degenerate):
+        inv = 1.0 / n
+        return (w * inv, x * inv, y * inv, z * inv)
     inv = 1.0 / ops.where(degenerate, 1.0, n)
     return (ops.where(degenerate, 1.0, w * inv), ops.where(degenerate, 0.0, x * inv),
             ops.where(degenerate, 0.0, y * inv), ops.where(degenerate, 0.0, z * inv))
@@ -325,6 +346,7 @@ class SerialChain:
     bones: tuple[Vec, ...]  # l_i: node i in node i-1's frame (zero for node 0)
     variables: tuple[int, ...]  # nodes whose local rotation the solve changes
     axes: tuple[Vec | None, ...]  # per variable: hinge axis (in the parent frame) or None
+    reach: tuple[float, float, float]  # the effector's reach: far, near and rounding slack
 
     @property
     def free_balls(self) -> bool:
@@ -384,6 +406,11 @@ class SerialChain:
                 out.append((v, None, float(ball_limit[i]), None))
         return out
 
+    def unreachable(self, target: Vec, p0: Vec, ops: Any) -> Any:
+        """Whether the target lies outside the shell the effector can reach from ``p0``."""
+        e = sub(target, p0)
+        return outside_shell(ops.sqrt(dot(e, e)), *self.reach)
+
     @staticmethod
     def project(R: list[Quat], limits: list[tuple], ops: Any) -> list[Quat]:
         """Variables projected into their :meth:`limits` (:func:`limit`)."""
@@ -409,6 +436,7 @@ def serial_chain(model: Any) -> SerialChain | None:
         variables=tuple(int(v) for v in model.var_nodes),
         axes=tuple(tuple(float(c) for c in a) if h else None
                    for a, h in zip(axes, model.hinge, strict=True)),
+        reach=(float(model.reach_far[0]), float(model.reach_near[0]), model.reach_slack),
     )
 
 
@@ -483,7 +511,7 @@ def solve_jacobian(
     chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, method: str,
     tol: float, max_iter: int, *, inv_w2: np.ndarray, damping: float, rcond: float,
     max_step: float, limits: list[tuple], record: bool, ops: Any,
-) -> tuple[list[Quat], History, list[list[Quat]]]:
+) -> tuple[list[Quat], list[Vec], History, list[list[Quat]]]:
     """Iterate a Jacobian method, as :func:`course.ik.jacobian.solve_problem` does on the
     general model: capped steps (``max_step``), backtracking (a step that raises the error is
     undone and the next one halved), the shared :class:`History` bookkeeping.
@@ -491,6 +519,7 @@ def solve_jacobian(
     Returns
     -------
     R : final local rotations of the nodes
+    P : their positions (forward kinematics)
     history : History
     frames : the local rotations before the first and after every iteration (``record``)
     """
@@ -520,7 +549,7 @@ def solve_jacobian(
     if not history.converged.all():
         cols = np.array([np.broadcast_arrays(*c) for c in chain.columns(Q, P, base)])
         history.singular = lost_rank(np.moveaxis(cols.reshape(len(cols), 3, -1), -1, 0), rcond)
-    return R, history, frames
+    return R, P, history, frames
 
 
 # --------------------------------------------------------------------------- FABRIK
@@ -528,14 +557,13 @@ def toward(frm: Vec, to: Vec, length: Scalar, fallback: Vec, ops: Any) -> Vec:
     r""":math:`p_{frm} + d\,\widehat{(p_{to} - p_{frm})}`; along ``fallback`` (a unit vector)
     where the two points coincide. (Written out: FABRIK spends its time here.)"""
     fx, fy, fz = frm
-    dx, dy, dz = to[0] - fx, to[1] - fy, to[2] - fz
-    n = ops.sqrt(dx * dx + dy * dy + dz * dz)
+    n = ops.dist(frm, to)
     ok = n >= TINY
     if not ops.all(ok):
-        dx, dy, dz = ops.select(ok, (dx, dy, dz), fallback)
+        to = ops.select(ok, to, add(frm, fallback))
         n = ops.where(ok, n, 1.0)
     k = length / n
-    return (fx + dx * k, fy + dy * k, fz + dz * k)
+    return (fx + (to[0] - fx) * k, fy + (to[1] - fy) * k, fz + (to[2] - fz) * k)
 
 
 def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], back: list[Vec],
@@ -585,7 +613,8 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any
 
     A target beyond the reach :math:`\sum d_i` is answered in one pass, the chain stretched
     straight at it. A batch iterates only its problems still running. ``frames`` and
-    ``errors``, if given, receive the points and the effector errors after every iteration.
+    ``errors``, if given, receive the points and the effector errors (copies, a float or
+    (B,)) after every iteration.
 
     Returns
     -------
@@ -604,8 +633,7 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any
             reach = reach + length
             straight.append(add(root, scale(u, reach)))
         P = ops.select(far, straight, P)
-    e = sub(P[-1], target)
-    err = ops.sqrt(dot(e, e))
+    err = ops.dist(P[-1], target)
     its = ops.where(far, 1, 0)
     active = ops.both(ops.invert(far), err >= tol)
     for _ in range(max_iter):
@@ -614,8 +642,7 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any
         idx = np.flatnonzero(active) if ops is ARRAYS else None
         Q, t = fabrik_pass(*ops.take((P, target, root, d, rest, back), idx), ops), \
             ops.take(target, idx)
-        e = sub(Q[-1], t)
-        err_q = ops.sqrt(dot(e, e))
+        err_q = ops.dist(Q[-1], t)
         P = ops.put(P, idx, Q)
         err = ops.put(err, idx, err_q)
         its = ops.put(its, idx, ops.take(its, idx) + 1)
@@ -623,31 +650,39 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any
         if frames is not None:
             frames.append(ops.copy(P))
         if errors is not None:
-            errors.append(ops.batch(ops.copy(err)))
+            errors.append(ops.copy(err))
     return P, its, err
 
 
-def fit_chain(chain: SerialChain, R: list[Quat], Q: list[Quat], base: Quat, P_new: list[Vec],
-              ops: Any) -> list[Quat]:
+def fit_chain(chain: SerialChain, R: list[Quat], Q: list[Quat], P_old: list[Vec], base: Quat,
+              P_new: list[Vec], ops: Any) -> tuple[list[Quat], list[Vec]]:
     r"""Local rotations that put a ball-joint chain on the points ``P_new`` (same bones): each
     node's global orientation turned by the shortest arc from its old bone direction to the
-    new one, :math:`Q_i' = \mathrm{arc}(Q_i l_{i+1},\ p'_{i+1} - p'_i)\,Q_i` (so every bone
-    keeps its twist), then :math:`R_i' = Q_{i-1}'^{-1} Q_i'`; ``Q`` are the :math:`Q_i` of
-    ``R``."""
-    R, parent = list(R), base
+    new one, :math:`Q_i' = \mathrm{arc}(p_{i+1} - p_i,\ p'_{i+1} - p'_i)\,Q_i` (so every bone
+    keeps its twist), then :math:`R_i' = Q_{i-1}'^{-1} Q_i'`; ``Q`` and ``P_old`` are the
+    :math:`Q_i` and :math:`p_i` of ``R``. Also returns the positions of the new pose by
+    forward kinematics on the way, :math:`p'_{i+1} = p'_i + Q_i' l_{i+1}` from the root
+    (equal to ``P_new`` up to rounding: the residual they give is the returned pose's own)."""
+    R, parent, p = list(R), base, P_new[0]
+    P = [p]
     for i in range(len(R) - 1):
-        turn = arc_turn(qrot(Q[i], chain.bones[i + 1]), sub(P_new[i + 1], P_new[i]), ops)
+        bone = chain.bones[i + 1]
+        turn = arc_turn(sub(P_old[i + 1], P_old[i]), sub(P_new[i + 1], P_new[i]), ops)
         q = qmul(turn, Q[i])
         R[i] = qmul(qconj(parent), q)
         parent = q
-    return R
+        p = add(p, qrot(q, bone))
+        P.append(p)
+    return R, P
 
 
 def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
-                 max_iter: int, record: bool, ops: Any) -> tuple[list[Quat], History, list]:
+                 max_iter: int, record: bool, ops: Any
+                 ) -> tuple[list[Quat], list[Vec], History, list]:
     """FABRIK on a chain of free ball joints: iterate on positions alone (:func:`fabrik_points`),
     then fit the rotations once (:func:`fit_chain`; exact, the points keep the bones).
-    ``record`` fits every iteration's points too."""
+    ``record`` fits every iteration's points too. Returns the final local rotations, their
+    positions (forward kinematics), the history and the recorded rotations."""
     Q, P = chain.forward(R, base, p0)
     e = sub(target, P[-1])
     history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
@@ -656,25 +691,22 @@ def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target:
     P_new, its, _ = fabrik_points(ops.copy(P), target, tol, max_iter, ops, points, errors)
     if record and len(points) < np.max(its):  # a stretch: answered before the loop
         points.append(P_new)
-    frames = [R] + [fit_chain(chain, R, Q, base, f, ops) for f in (points if record else [P_new])]
-    R_new = frames[-1]
+    fitted = [fit_chain(chain, R, Q, P, base, f, ops) for f in (points if record else [P_new])]
     # Residuals of the fitted poses (honest: what the returned rotations reach); without a
     # record, the points' errors stand for the iterations in between (the fit is exact).
-    if not record:
-        history.residuals += errors[:-1]
-    for f in frames[1:] if record else frames[-1:]:
-        e = sub(target, chain.forward(f, base, p0)[1][-1])
-        history.residuals.append(ops.batch(ops.sqrt(dot(e, e))))
+    if not record and len(errors) > 1:
+        history.residuals += list(np.reshape(errors[:-1], (len(errors) - 1, -1)))
+    for _, P in fitted if record else fitted[-1:]:
+        history.residuals.append(ops.batch(ops.dist(target, P[-1])))
     history.iterations = np.asarray(ops.batch(its), dtype=int)
     history.active[:] = False
-    if not record:
-        frames = []
-    return R_new, history, frames
+    R_new, P = fitted[-1]
+    return R_new, P, history, [R] + [f for f, _ in fitted] if record else []
 
 
 def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec,
                         tol: float, max_iter: int, limits: list[tuple], record: bool,
-                        ops: Any) -> tuple[list[Quat], History, list]:
+                        ops: Any) -> tuple[list[Quat], list[Vec], History, list]:
     r"""FABRIK with joint constraints (hinges, limits): forward reaching on the points
     (:func:`reach_forward`), then the backward pass in joint space, root to tip: with the
     parent placed (:math:`Q_{i-1}`, :math:`p_i` by forward kinematics) joint ``i`` turns its
@@ -710,13 +742,14 @@ def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
         history.update(ops.batch(ops.sqrt(dot(e, e))))
         if record:
             frames.append(R)
-    return R, history, frames
+    return R, P, history, frames
 
 
 # --------------------------------------------------------------------------- CCD
 def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
               max_iter: int, *, tip_to_root: bool, max_angle: float | None,
-              limits: list[tuple], record: bool, ops: Any) -> tuple[list[Quat], History, list]:
+              limits: list[tuple], record: bool, ops: Any
+              ) -> tuple[list[Quat], list[Vec], History, list]:
     r"""CCD sweeps, as :func:`course.ik.ccd.solve_problem` on the general model: every joint
     in turn (tip to root, or root to tip) turns the effector direction :math:`e - r_i` towards
     :math:`t - r_i` (:func:`aim`), is projected into its limit, and the chain below it turns
@@ -751,4 +784,4 @@ def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Ve
         history.update(ops.batch(ops.sqrt(dot(e, e))))
         if record:
             frames.append(R)
-    return R, history, frames
+    return R, P, history, frames

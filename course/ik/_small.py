@@ -126,16 +126,35 @@ def twist_angle(R: Array, axis: Array) -> Array:
 
 
 def rotvec_of(R: Array) -> Array:
-    r"""Rotation vectors of rotation matrices, :math:`\theta\,\hat s` with
-    :math:`s = (R_{21}-R_{12}, R_{02}-R_{20}, R_{10}-R_{01}) = 2\sin\theta\,\hat a`.
+    r"""Rotation vectors :math:`\theta\,\hat a`, :math:`\theta \in [0, \pi]`, of rotation
+    matrices ``R`` (..., 3, 3).
 
-    Accurate away from half turns (the direction of a near half turn is ill-conditioned here;
-    the solvers only use it for errors and limits, where that is harmless)."""
+    The angle is :math:`\mathrm{atan2}(\tfrac12\lVert s\rVert,\ \tfrac12(\mathrm{tr}R - 1))`
+    with :math:`s = (R_{21}-R_{12}, R_{02}-R_{20}, R_{10}-R_{01}) = 2\sin\theta\,\hat a`,
+    accurate everywhere. The axis is :math:`\hat s` up to a quarter turn; beyond, where
+    :math:`\sin\theta` vanishes and :math:`\hat s` with it (a half turn has
+    :math:`s = 0`), it comes from the symmetric part
+    :math:`B = \tfrac12(R + R^T) - \cos\theta\, I = (1 - \cos\theta)\,\hat a\hat a^T`: the
+    column of its largest diagonal entry, normalised, its sign taken from :math:`s` (at an
+    exact half turn either sign is the same rotation).
+    """
     s = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
                   R[..., 1, 0] - R[..., 0, 1]], -1)
     n = norm(s)
-    angle = np.arctan2(0.5 * n, 0.5 * (R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2] - 1.0))
-    return s * (angle / np.where(n > TINY, n, 1.0))[..., None]
+    c = 0.5 * (R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2] - 1.0)
+    angle = np.arctan2(0.5 * n, c)
+    # theta / (2 sin theta): -> 1/2 for small angles, so s keeps its first-order accuracy.
+    out = s * np.where(n > TINY, angle / np.where(n > TINY, n, 1.0), 0.5)[..., None]
+    wide = c < 0.0
+    if np.any(wide):
+        Rw, cw, sw = R[wide], c[wide], s[wide]
+        B = 0.5 * (Rw + np.swapaxes(Rw, -1, -2)) - cw[:, None, None] * np.eye(3)
+        i = np.argmax(np.diagonal(B, axis1=-2, axis2=-1), axis=-1)
+        col = np.take_along_axis(B, i[:, None, None], axis=-1)[..., 0]  # B[:, i]
+        axis = col / np.maximum(norm(col), TINY)[:, None]
+        axis = axis * np.where(dot(axis, sw) < 0, -1.0, 1.0)[:, None]
+        out[wide] = axis * angle[wide][:, None]
+    return out
 
 
 def orthonormalize(R: Array) -> Array:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import weakref
 from collections.abc import Mapping
 from functools import lru_cache
@@ -10,8 +11,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from course import fk
+from course.rotations import matrix_from_quat, quat_from_matrix
+from course.rotations._checks import as_array
+
 from . import ccd, fabrik, jacobian
-from ._chains import ChainModel, Problem, build_model, unreachable_targets
+from ._chains import ChainModel, Problem, build_model
 from ._serial import (
     ARRAYS,
     FLOATS,
@@ -21,6 +26,7 @@ from ._serial import (
     solve_fabrik,
     solve_fabrik_joints,
     solve_jacobian,
+    unit_like,
 )
 from .result import History, IKResult, Target
 from .two_link import two_link
@@ -71,7 +77,8 @@ def solve(
         Position of joint 0.
     targets : mapping joint (name or index) -> target
         A world position ``(3,)`` or ``(B, 3)``; a pair ``(position, quaternion)``; or a
-        :class:`Target`. Orientation targets need a Jacobian method.
+        :class:`Target` (``Target(None, q)``: an orientation alone). Orientation targets need
+        a Jacobian method.
     method : {"two_link", "ccd", "fabrik", "jacobian_transpose", "pseudo_inverse", "dls"}
     root : joint name or index, optional
         The joint that stays fixed; default joint 0.
@@ -88,9 +95,10 @@ def solve(
     record : bool
         Keep every iteration's pose in ``result.frames``.
     **options
-        ``damping`` (DLS :math:`\lambda`, a length), ``rcond`` (pseudo-inverse cutoff),
-        ``max_step`` (largest joint step per Jacobian iteration, radians), ``tip_to_root`` and
-        ``max_angle`` (CCD), ``pole`` (a world point) and ``flip`` (two-link).
+        ``damping`` (DLS :math:`\lambda`, a finite length >= 0), ``rcond`` (pseudo-inverse
+        cutoff, in [0, 1)), ``max_step`` (largest joint step per Jacobian iteration, radians,
+        > 0), ``tip_to_root`` and ``max_angle`` (CCD: the largest turn per joint and step,
+        radians, > 0), ``pole`` (a world point) and ``flip`` (two-link).
 
     Returns
     -------
@@ -99,23 +107,22 @@ def solve(
     Raises
     ------
     ValueError
-        Naming the argument: unknown method, joint or option; non-finite or badly shaped
-        input; a two-link solve whose path is not two bones.
+        Naming the argument: unknown method, joint or option; an option value, ``tol`` or
+        ``max_iter`` out of range; non-finite or badly shaped input, a zero quaternion; a
+        two-link solve whose path is not two bones.
     """
-    from course import fk
-    from course.rotations import matrix_from_quat
-    from course.rotations._checks import as_array
-
     if method not in METHODS:
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
-    allowed = {"two_link": {"pole", "flip"}, "ccd": {"tip_to_root", "max_angle"},
-               "fabrik": set()}.get(method, {"damping", "rcond", "max_step"})
-    unknown = set(options) - allowed
-    if unknown:
-        raise ValueError(f"options: {sorted(unknown)} do not apply to method {method!r} "
-                         f"(it takes {sorted(allowed) or 'none'})")
-    if not (np.isfinite(tol) and tol > 0):
+    _check_options(method, options)
+    if options.get("max_angle") == math.inf:  # no cap
+        options["max_angle"] = None
+    if not (_is_number(tol) and math.isfinite(tol) and tol > 0):
         raise ValueError(f"tol: expected a positive number, got {tol!r}")
+    if max_iter is None:
+        max_iter = DEFAULT_MAX_ITER[method]
+    elif (isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer)
+          or max_iter < 0):
+        raise ValueError(f"max_iter: expected a whole number >= 0, got {max_iter!r}")
     J = skeleton.n_joints
     local = as_array(local_rotations, "local_rotations", (4,))
     if local.ndim not in (2, 3) or local.shape[-2] != J:
@@ -139,7 +146,10 @@ def solve(
         if position is not None:
             pos_t[j] = as_array(position, f"{name} position", (3,))
         if orientation is not None:
-            rot_t[j] = as_array(orientation, f"{name} orientation", (4,))
+            q = as_array(orientation, f"{name} orientation", (4,))
+            if np.min(np.einsum("...i,...i->...", q, q)) < 1e-24:
+                raise ValueError(f"{name} orientation: the zero quaternion is no rotation")
+            rot_t[j] = q
     if rot_t and method not in jacobian.METHODS:
         raise ValueError(f"targets: orientation targets need a Jacobian method, not {method!r}")
     if k in pos_t or k in rot_t:
@@ -155,19 +165,17 @@ def solve(
 
     model, serial = _model(skeleton, k, tuple(pos_t), tuple(rot_t))
     col_weight = _weights(skeleton, model, weights)
-    hinge_limits, ball_limit = _limits(skeleton, model, limits)
-    limited = bool(limits)
-    max_iter = DEFAULT_MAX_ITER[method] if max_iter is None else int(max_iter)
+    max_iter = int(max_iter)
     if _FAST_PATH and serial is not None and method != "two_link":
         (j,) = pos_t
-        local_out, root_out, positions, history, frames = _solve_serial(
+        local_out, root_out, positions, history, unreachable, frames = _solve_serial(
             skeleton, serial, model, local, root_pos, k, pos_t[j], B, batched, method, tol,
-            max_iter, col_weight, serial.limits(hinge_limits, ball_limit) if limited else [],
-            record, **options)
-        unreachable = unreachable_targets(model, np.broadcast_to(pos_t[j], (B, 3))[:, None],
-                                          np.broadcast_to(positions[:, k], (B, 3)))
+            max_iter, col_weight,
+            serial.limits(*_limits(skeleton, model, limits)) if limits else [], record,
+            **options)
         return _result(local_out, root_out, positions, history, unreachable, frames, tol,
                        method, batched)
+    hinge_limits, ball_limit = _limits(skeleton, model, limits)
 
     local_b = np.broadcast_to(local, (B, J, 4)).copy()
     root_b = np.broadcast_to(root_pos, (B, 3)).copy()
@@ -217,18 +225,50 @@ def solve(
                    batched)
 
 
+# The options each method takes, and the values they accept: (test, what it must be).
+OPTIONS: dict[str, dict[str, tuple[Any, str]]] = {
+    "two_link": {"pole": (None, ""), "flip": (None, "")},
+    "ccd": {"tip_to_root": (None, ""),
+            "max_angle": (lambda x: x > 0, "a positive angle in radians (inf: no cap)")},
+    "fabrik": {},
+    **dict.fromkeys(jacobian.METHODS, {
+        "damping": (lambda x: x >= 0 and math.isfinite(x), "a finite length >= 0"),
+        "rcond": (lambda x: 0 <= x < 1, "a number in [0, 1)"),
+        "max_step": (lambda x: x > 0, "a positive angle in radians (inf: no cap)"),
+    }),
+}
+
+
+def _is_number(x: Any) -> bool:
+    return isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool)
+
+
+def _check_options(method: str, options: Mapping[str, Any]) -> None:
+    """``ValueError`` naming an option the method does not take or a value it cannot use
+    (NaN fails every test; ``None`` means the default)."""
+    allowed = OPTIONS[method]
+    unknown = set(options) - set(allowed)
+    if unknown:
+        raise ValueError(f"options: {sorted(unknown)} do not apply to method {method!r} "
+                         f"(it takes {sorted(allowed) or 'none'})")
+    for name, value in options.items():
+        test, what = allowed[name]
+        if test is not None and value is not None and not (_is_number(value) and test(value)):
+            raise ValueError(f"{name}: expected {what}, got {value!r}")
+
+
 def _result(local: Array, root_pos: Array, positions: Array, history: History,
             unreachable: Array, frames: list[tuple[Array, Array]] | None, tol: float,
             method: str, batched: bool) -> IKResult:
     """The :class:`IKResult` of batched (B, ...) arrays; ``frames`` are (local, positions)."""
-    residuals = np.stack(history.residuals)
+    residuals = np.stack(history.residuals) if batched else np.concatenate(history.residuals)
     return IKResult(
         local_rotations=_unbatch(local, batched),
         root_position=_unbatch(root_pos, batched),
         positions=_unbatch(positions, batched),
         converged=_unbatch(history.error < tol, batched),
         iterations=_unbatch(history.iterations, batched),
-        residuals=residuals if batched else residuals[:, 0],
+        residuals=residuals,
         reason=_unbatch(history.reasons(unreachable), batched),
         method=method,
         frames=None if frames is None else [
@@ -325,9 +365,6 @@ def _limits(skeleton: Any, m: ChainModel, limits: Mapping | None) -> tuple[Array
 def _pose(skeleton: Any, model: ChainModel, local: Array, root_pos: Array, Qk: Array | None,
           pk: Array, Rn: Array) -> tuple[Array, Array, Array]:
     """Local rotations, root position and global positions of solved edge rotations."""
-    from course import fk
-    from course.rotations import quat_from_matrix
-
     local = local.copy()
     joints = model.edge_joint[model.var_nodes]
     q = quat_from_matrix(Rn[:, model.var_nodes])
@@ -372,15 +409,15 @@ def _solve_serial(
     col_weight: Array, limits: list[tuple], record: bool, damping: float | None = None,
     rcond: float = 1e-6, max_step: float = 0.5, tip_to_root: bool = True,
     max_angle: float | None = None,
-) -> tuple[Array, Array, Array, History, list[tuple[Array, Array]] | None]:
+) -> tuple[Array, Array, Array, History, NDArray[np.bool_],
+           list[tuple[Array, Array]] | None]:
     """CCD, FABRIK or a Jacobian method on a serial chain (:mod:`course.ik._serial`), one
     problem in Python floats or a batch on component arrays. Returns local rotations, root
-    position and positions, all (B, ...), the history and the recorded (local, positions)
-    frames."""
-    from course import fk
-
+    position and positions, all (B, ...), the history, whether each target is out of reach
+    and the recorded (local, positions) frames."""
     ops = ARRAYS if batched else FLOATS
-    J, n = skeleton.n_joints, len(chain.joints)
+    J = skeleton.n_joints
+    joints = list(chain.joints)
     local = local.reshape(1, J, 4) if B == 1 else np.broadcast_to(local, (B, J, 4))
     root_pos = root_pos.reshape(1, 3) if B == 1 else np.broadcast_to(root_pos, (B, 3))
     if k == 0:  # the world frame is held and joint 0 sits at the root position
@@ -390,44 +427,50 @@ def _solve_serial(
                                                         local, root_pos)
         base = _components(orientations[:, skeleton.parents[k]], ops)
         p0 = _components(positions[:, k], ops)
-    start = local[:, list(chain.joints)]  # (B, n, 4)
-    R = [_components(start[:, i], ops) for i in range(n)]
+    if ops is FLOATS:
+        rows = local[0].tolist()
+        start = [tuple(rows[j]) for j in joints]
+        target = tuple(target.reshape(3).tolist())
+    else:
+        start = [_components(local[:, j], ops) for j in joints]
+        target = _components(np.broadcast_to(target, (B, 3)), ops)
+    R = start
     if limits:
         R = chain.project(R, limits, ops)
-    target = _components(np.broadcast_to(target, (B, 3)), ops)
     if method == "fabrik" and chain.free_balls and not limits:  # positions alone suffice
-        R, history, frames = solve_fabrik(chain, R, base, p0, target, tol, max_iter, record, ops)
+        R, P, history, frames = solve_fabrik(chain, R, base, p0, target, tol, max_iter, record,
+                                             ops)
     elif method == "fabrik":
-        R, history, frames = solve_fabrik_joints(chain, R, base, p0, target, tol, max_iter,
-                                                 limits, record, ops)
+        R, P, history, frames = solve_fabrik_joints(chain, R, base, p0, target, tol, max_iter,
+                                                    limits, record, ops)
     elif method == "ccd":
-        R, history, frames = solve_ccd(chain, R, base, p0, target, tol, max_iter,
-                                       tip_to_root=tip_to_root, max_angle=max_angle,
-                                       limits=limits, record=record, ops=ops)
+        R, P, history, frames = solve_ccd(chain, R, base, p0, target, tol, max_iter,
+                                          tip_to_root=tip_to_root, max_angle=max_angle,
+                                          limits=limits, record=record, ops=ops)
     else:
         if damping is None:
-            damping = 0.05 * max(float(model.reach_far.max()), 1e-9)
-        R, history, frames = solve_jacobian(
+            damping = jacobian.DEFAULT_DAMPING * model.length_scale
+        R, P, history, frames = solve_jacobian(
             chain, R, base, p0, target, method, tol, max_iter,
             inv_w2=tuple((1.0 / col_weight**2).tolist()), damping=damping, rcond=rcond,
             max_step=max_step, limits=limits, record=record, ops=ops)
 
     covers = chain.joints == tuple(range(J))  # a chain skeleton: its FK is the chain's
 
-    def pose(R: list) -> tuple[Array, Array]:
-        q = ops.stack(R, B)  # (B, n, 4)
-        q /= np.linalg.norm(q, axis=-1, keepdims=True)
-        q *= np.where(np.einsum("bni,bni->bn", q, start) < 0, -1.0, 1.0)[..., None]
+    def pose(R: list, P: list | None = None) -> tuple[Array, Array]:
+        """Local rotations (unit, in the starting quaternions' signs) and positions of ``R``;
+        ``P``, if given, are the chain's positions of ``R`` already computed."""
         out = local.copy()
-        out[:, list(chain.joints)] = q
+        out[:, joints] = ops.stack([unit_like(q, r, ops) for q, r in zip(R, start, strict=True)],
+                                   B)
         if covers:
-            _, P = chain.forward(R, base, p0)
-            return out, ops.stack(P, B)
+            return out, ops.stack(chain.forward(R, base, p0)[1] if P is None else P, B)
         return out, fk.forward_kinematics(skeleton.parents, skeleton.offsets, out, root_pos)[0]
 
-    local_out, positions = pose(R)
+    local_out, positions = pose(R, P)
     recorded = [pose(f) for f in frames] if record else None
-    return local_out, root_pos.copy(), positions, history, recorded
+    unreachable = ops.batch(chain.unreachable(target, p0, ops))
+    return local_out, root_pos.copy(), positions, history, unreachable, recorded
 
 
 def _components(a: Array, ops: Any) -> tuple:

@@ -37,6 +37,8 @@ from .result import History
 Array = NDArray[np.float64]
 
 METHODS = ("jacobian_transpose", "pseudo_inverse", "dls")
+# DLS damping when none is given, as a share of the longest path to an effector.
+DEFAULT_DAMPING = 0.05
 
 
 def chain_jacobian(pivots: ArrayLike, axes: ArrayLike, effector: ArrayLike) -> Array:
@@ -197,7 +199,7 @@ def solve_problem(
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
     m = problem.model
     if damping is None:
-        damping = 0.05 * max(float(problem.reach()[0].max()), 1e-9)
+        damping = DEFAULT_DAMPING * m.length_scale
     w = problem.col_weight
     uniform = bool(np.all(w == 1.0))
     Rn = problem.Rn

@@ -45,10 +45,10 @@ class IKResult:
         Largest effector error before the first and after every iteration.
     reason : str or ndarray of str, shape (B,)
         ``""`` when converged, else ``"unreachable"`` (no pose reaches: the best, stretched
-        pose is returned), ``"singular"`` (a Jacobian method stopped where the Jacobian has
-        lost rank, so no step can reduce the remaining error: e.g. a straight chain and a
-        target along it), ``"max_iterations"`` or ``"stalled"`` (no more progress: a local
-        minimum or a constrained chain).
+        pose is returned), ``"singular"`` (a Jacobian method stalled where the Jacobian has
+        lost rank, so no step can reduce the remaining error), ``"max_iterations"`` (still
+        making progress when the iteration cap was hit) or ``"stalled"`` (no more progress:
+        a local minimum or a constrained chain).
     frames : list of dict, optional
         With ``record=True``: the pose before the first and after every iteration, each a
         dict with ``"positions"`` ``([B,] J, 3)`` and ``"local_rotations"`` ``([B,] J, 4)``.
@@ -113,8 +113,11 @@ class History:
     def reasons(self, unreachable: Array) -> NDArray[np.str_]:
         """Why each problem stopped: ``""`` converged, else the most informative reason."""
         converged = self.converged
-        out = np.where(self.stalled, "stalled", "max_iterations").astype("<U14")
-        out[self.singular] = "singular"
+        out = np.full(converged.shape, "max_iterations", dtype="<U14")
+        out[self.stalled] = "stalled"
+        # Singular only where the solve stalled on a lost-rank Jacobian: one that merely ran
+        # out of iterations was still making progress, whatever its last Jacobian.
+        out[self.stalled & self.singular] = "singular"
         out[unreachable & ~converged] = "unreachable"
         out[converged] = ""
         return out
