@@ -12,12 +12,14 @@ import subprocess
 import sys
 import time
 import urllib.request
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 NOTEBOOK = Path(__file__).with_name("e2e_views.ipynb")
+DRAG_NOTEBOOK = Path(__file__).with_name("e2e_drag.ipynb")
 ARTIFACTS = REPO / "test-artifacts"
 TOKEN = "course-e2e"
 KERNEL_IDLE = ("window.jupyterapp?.shell.currentWidget?.sessionContext?.session?.kernel"
@@ -47,7 +49,8 @@ def lab(request, tmp_path_factory):
     with the 3D view as an image widget (``static``, what CI executes) or the interactive
     ``trame`` view a student gets by default."""
     root = tmp_path_factory.mktemp("lab")
-    shutil.copy(NOTEBOOK, root / NOTEBOOK.name)
+    for notebook in (NOTEBOOK, DRAG_NOTEBOOK):
+        shutil.copy(notebook, root / notebook.name)
     port = _free_port()
     env = {
         **os.environ,
@@ -85,10 +88,12 @@ def lab(request, tmp_path_factory):
         log.close()
 
 
-def test_slider_moves_the_skeleton_in_jupyterlab(lab):
+@contextmanager
+def _notebook_page(base: str, notebook: Path, artifact: str):
+    """A headless Chromium page on ``notebook`` in the served Lab, all its cells run; on a
+    failure the page is saved as ``test-artifacts/<artifact>_failure.png``."""
     from playwright.sync_api import sync_playwright
 
-    base, backend = lab
     ARTIFACTS.mkdir(exist_ok=True)
     with sync_playwright() as p:
         browser = p.chromium.launch(
@@ -97,47 +102,90 @@ def test_slider_moves_the_skeleton_in_jupyterlab(lab):
         )
         page = browser.new_page(viewport={"width": 1400, "height": 1000})
         try:
-            page.goto(f"{base}/lab/tree/{NOTEBOOK.name}?reset&token={TOKEN}")
+            page.goto(f"{base}/lab/tree/{notebook.name}?reset&token={TOKEN}")
             page.wait_for_function("window.jupyterapp && document.querySelector('.jp-Notebook')",
                                    timeout=60_000)
             page.wait_for_function(KERNEL_IDLE, timeout=60_000)
             page.evaluate(RUN_ALL)
-            view = page.locator(".widget-image" if backend == "static" else "iframe").first
-            view.wait_for(state="visible", timeout=60_000)
-            readout = page.locator(".widget-html-content").filter(has_text="p").last
-            page.wait_for_function(
-                "[...document.querySelectorAll('.widget-html-content')]"
-                ".some(e => e.textContent.includes('p'))", timeout=30_000)
-            widget_area = page.locator(".jp-OutputArea-output").last
-            widget_area.scroll_into_view_if_needed()
-            page.wait_for_timeout(500 if backend == "static" else 6000)
-            text_before = readout.inner_text()
-            image_before = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_before.png"))
-            widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_before.png"))
-
-            handle = page.locator(".widget-slider .noUi-handle").first
-            handle.scroll_into_view_if_needed()
-            box = handle.bounding_box()
-            x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
-            page.mouse.move(x, y)
-            page.mouse.down()
-            page.mouse.move(x + 60, y, steps=8)
-            page.mouse.up()
-
-            page.wait_for_function(
-                "([t]) => ![...document.querySelectorAll('.widget-html-content')]"
-                ".some(e => e.innerText === t)", arg=[text_before], timeout=20_000)
-            page.wait_for_timeout(800 if backend == "static" else 4000)  # the last frame
-            widget_area.scroll_into_view_if_needed()
-            text_after = readout.inner_text()
-            image_after = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_after.png"))
-            widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_after.png"))
-            alive = page.evaluate(KERNEL_IDLE.replace(" === 'idle'", " !== 'dead'"))
+            yield page
         except Exception:
-            page.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_failure.png"), full_page=True)
+            page.screenshot(path=str(ARTIFACTS / f"{artifact}_failure.png"), full_page=True)
             raise
         finally:
             browser.close()
+
+
+def _kernel_alive(page) -> bool:
+    return page.evaluate(KERNEL_IDLE.replace(" === 'idle'", " !== 'dead'"))
+
+
+def test_slider_moves_the_skeleton_in_jupyterlab(lab):
+    base, backend = lab
+    with _notebook_page(base, NOTEBOOK, f"e2e_{backend}") as page:
+        view = page.locator(".widget-image" if backend == "static" else "iframe").first
+        view.wait_for(state="visible", timeout=60_000)
+        readout = page.locator(".widget-html-content").filter(has_text="Qj =").last
+        page.wait_for_function(
+            "[...document.querySelectorAll('.widget-html-content')]"
+            ".some(e => e.innerText.includes('Qj ='))", timeout=30_000)
+        widget_area = page.locator(".jp-OutputArea-output").last
+        widget_area.scroll_into_view_if_needed()
+        page.wait_for_timeout(500 if backend == "static" else 6000)
+        text_before = readout.inner_text()
+        image_before = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_before.png"))
+        widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_before.png"))
+
+        handle = page.locator(".widget-slider .noUi-handle").first
+        handle.scroll_into_view_if_needed()
+        box = handle.bounding_box()
+        x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+        page.mouse.move(x, y)
+        page.mouse.down()
+        page.mouse.move(x + 60, y, steps=8)
+        page.mouse.up()
+
+        page.wait_for_function(
+            "([t]) => ![...document.querySelectorAll('.widget-html-content')]"
+            ".some(e => e.innerText === t)", arg=[text_before], timeout=20_000)
+        page.wait_for_timeout(800 if backend == "static" else 4000)  # the last frame
+        widget_area.scroll_into_view_if_needed()
+        text_after = readout.inner_text()
+        image_after = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_after.png"))
+        widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_after.png"))
+        alive = _kernel_alive(page)
     assert alive, "the kernel died while the slider moved"
     assert text_after != text_before
     assert image_after != image_before, "the 3D view did not change"
+
+
+@pytest.mark.parametrize("lab", ["trame"], indirect=True)
+def test_dragging_the_target_sphere_solves_ik_again(lab):
+    """In the interactive view the target is a sphere to drag: the sliders follow it."""
+    base, _ = lab
+    with _notebook_page(base, DRAG_NOTEBOOK, "e2e_drag") as page:
+        stream = page.locator(".jp-OutputArea-output").filter(has_text="target handle at")
+        stream.wait_for(state="visible", timeout=60_000)
+        u, v = (float(x) for x in stream.inner_text().split()[3:5])
+        view = page.locator("iframe").first
+        view.wait_for(state="visible", timeout=60_000)
+        view.scroll_into_view_if_needed()
+        page.wait_for_timeout(6000)  # trame's first frame
+        readouts = page.locator(".widget-slider .widget-readout")
+        before = [readouts.nth(k).inner_text() for k in range(2)]
+        view.screenshot(path=str(ARTIFACTS / "e2e_drag_before.png"))
+        box = view.bounding_box()
+        x, y = box["x"] + u * box["width"], box["y"] + v * box["height"]
+        page.mouse.move(x, y)
+        page.mouse.down()
+        page.mouse.move(x - 70, y - 50, steps=12)
+        page.mouse.up()
+        page.wait_for_function(
+            "([t]) => [...document.querySelectorAll('.widget-slider .widget-readout')]"
+            ".slice(0, 2).map(e => e.innerText).join() !== t", arg=[",".join(before)],
+            timeout=20_000)
+        page.wait_for_timeout(3000)
+        after = [readouts.nth(k).inner_text() for k in range(2)]
+        view.screenshot(path=str(ARTIFACTS / "e2e_drag_after.png"))
+        alive = _kernel_alive(page)
+    assert alive, "the kernel died while the target was dragged"
+    assert after != before, "dragging the sphere did not move the target sliders"
