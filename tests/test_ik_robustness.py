@@ -158,3 +158,59 @@ def test_iteration_cap_reports_max_iterations_not_singular(method):
     assert not capped.converged and capped.reason == "max_iterations"
     off = solve(PLANAR, IDENT, np.zeros(3), {"end_effector": [3.0, 2.0, 2.0]}, method=method)
     assert not off.converged and off.reason == "singular"
+
+
+# --------------------------------------------------------------------------- rank-1 fits
+def test_best_rotation_rank_one_is_the_shortest_arc():
+    """Collinear offsets (and zero-length ones among them) leave a twist free; the fit takes
+    the shortest arc, which keeps the previous twist, alone or in a batch."""
+    from course.ik._small import arc_matrix, best_rotation
+
+    rng = np.random.default_rng(5)
+    B = 12
+    a = rng.normal(size=(B, 3))
+    b = rng.normal(size=(B, 3))
+    scales_u = np.stack([np.ones(B), np.zeros(B), rng.uniform(0.5, 2, B)], 1)  # a zero bone
+    u = scales_u[..., None] * a[:, None]
+    v = scales_u[..., None] * b[:, None] / np.linalg.norm(b, axis=1)[:, None, None] * \
+        np.linalg.norm(a, axis=1)[:, None, None]
+    R = best_rotation(u, v)
+    np.testing.assert_allclose(R, arc_matrix(a, b), atol=1e-12)
+    for i in (0, 5):
+        np.testing.assert_allclose(best_rotation(u[i:i + 1], v[i:i + 1])[0], R[i], atol=1e-12)
+    # A full-rank fit is still Kabsch: it recovers an exact rotation.
+    Rt = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    Rt *= np.sign(np.linalg.det(Rt))
+    pts = rng.normal(size=(5, 3))
+    np.testing.assert_allclose(best_rotation(pts[None], (pts @ Rt.T)[None])[0], Rt, atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def walk(shared_bvh_dir):
+    from course.bvh import load_bvh
+
+    return load_bvh(shared_bvh_dir / "cmu_12_01_walk.bvh")
+
+
+@pytest.mark.parametrize("root_name, hand", [("LeftFoot", "LeftHand"), ("RightFoot", "RightHand"),
+                                             ("LeftFoot", "RightHand")])
+def test_cmu_fabrik_batched_equals_single(walk, root_name, hand):
+    """The CMU skeleton has ten zero-length bones (LHipJoint, LowerBack, Neck, ...): fits at
+    those joints are rank 1. A batch of 9 reaches gives the same poses as 9 single solves, and
+    the leg hanging from the hips stays nearly put for a reach of 2 units."""
+    sk = walk.skeleton
+    local, root = walk.local_rotations[100], walk.root_positions[100]
+    pos0, _ = sk.forward_kinematics(local, root)
+    rng = np.random.default_rng(6)
+    d = rng.normal(size=(9, 3))
+    ts = pos0[sk.index(hand)] + 2.0 * d / np.linalg.norm(d, axis=1, keepdims=True)
+    batch = solve(sk, local, root, {hand: ts}, method="fabrik", root=root_name)
+    other_foot = sk.index("RightFoot" if root_name == "LeftFoot" else "LeftFoot")
+    for i, t in enumerate(ts):
+        one = solve(sk, local, root, {hand: t}, method="fabrik", root=root_name)
+        np.testing.assert_allclose(batch.positions[i], one.positions, atol=1e-9)
+        assert one.converged and batch.converged[i]
+        pos, _ = sk.forward_kinematics(one.local_rotations, one.root_position)
+        np.testing.assert_allclose(pos, one.positions, atol=1e-9)
+        assert np.linalg.norm(pos[sk.index(hand)] - t) < 1e-4
+        assert np.linalg.norm(pos[other_foot] - pos0[other_foot]) < 2.0

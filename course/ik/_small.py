@@ -88,7 +88,16 @@ def arc_matrix(u: Array, v: Array) -> Array:
 
 
 def best_rotation(u: Array, v: Array, w: Array | None = None) -> Array:
-    r"""The rotation ``R`` minimising :math:`\sum_i w_i\lVert R u_i - v_i\rVert^2` (Kabsch).
+    r"""The rotation ``R`` minimising :math:`\sum_i w_i\lVert R u_i - v_i\rVert^2` (Kabsch),
+    the smallest one where that leaves a freedom.
+
+    Kabsch maximises :math:`\mathrm{tr}(R H)`, :math:`H = \sum_i w_i u_i v_i^T = U\Sigma V^T`,
+    with :math:`R = V D U^T` (:math:`D` fixing the sign of the determinant). When :math:`H`
+    has rank 1 (the ``u_i`` or the ``v_i`` all on one line: a joint whose child offsets are
+    collinear, or zero-length bones among them), :math:`H = \sigma_1 a b^T` and every ``R``
+    with :math:`R a = b` is optimal: any twist about ``b``. The SVD would pick one at random
+    (and differently in a batch than alone); here it is the shortest arc from ``a`` to ``b``,
+    so the joint keeps its previous twist.
 
     Parameters
     ----------
@@ -106,12 +115,16 @@ def best_rotation(u: Array, v: Array, w: Array | None = None) -> Array:
         return arc_matrix(u[..., 0, :], v[..., 0, :])
     wu = u if w is None else u * w[..., None]
     H = np.swapaxes(wu, -1, -2) @ v  # sum_i u_i v_i^T
-    U, _, Vt = np.linalg.svd(H)
+    U, S, Vt = np.linalg.svd(H)
     d = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
     d = np.where(d == 0, 1.0, d)
     D = np.ones(H.shape[:-1])
     D[..., -1] = d
-    return np.swapaxes(Vt, -1, -2) @ (D[..., None] * np.swapaxes(U, -1, -2))
+    R = np.swapaxes(Vt, -1, -2) @ (D[..., None] * np.swapaxes(U, -1, -2))
+    rank1 = S[..., 1] <= 1e-9 * S[..., 0]
+    if np.any(rank1):
+        R = np.where(rank1[..., None, None], arc_matrix(U[..., :, 0], Vt[..., 0, :]), R)
+    return R
 
 
 def twist_angle(R: Array, axis: Array) -> Array:
