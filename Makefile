@@ -10,8 +10,11 @@ TEST_ENV := PYVISTA_JUPYTER_BACKEND=static PYVISTA_OFF_SCREEN=true
 
 .PHONY: lab test e2e setup sysdeps lint clean
 
+# As root (a container, a cloud VM) Jupyter refuses to start without --allow-root.
+LAB_FLAGS := $(if $(filter 0,$(shell id -u 2>/dev/null)),--allow-root,)
+
 lab: setup
-	$(VENV)/bin/jupyter lab notebooks/
+	$(VENV)/bin/jupyter lab $(LAB_FLAGS) notebooks/
 
 test: setup
 	$(TEST_ENV) $(PY) -m pytest --nbval-lax --nbval-current-env --ignore=tests/e2e tests notebooks assignments
