@@ -214,3 +214,29 @@ def test_cmu_fabrik_batched_equals_single(walk, root_name, hand):
         np.testing.assert_allclose(pos, one.positions, atol=1e-9)
         assert np.linalg.norm(pos[sk.index(hand)] - t) < 1e-4
         assert np.linalg.norm(pos[other_foot] - pos0[other_foot]) < 2.0
+
+
+def test_cmu_jacobian_transpose_with_two_effectors(walk):
+    """Rooted at the right foot, the left hand and the head pulled at once. Backtracking on
+    the summed error (the objective the transpose step descends), not on the largest one,
+    lets a step trade a little of one effector's error for much of the other's. Measured: 6 of
+    6 within 1e-3 (before: 0 of 6, all 'stalled')."""
+    sk = walk.skeleton
+    local, root = walk.local_rotations[100], walk.root_positions[100]
+    pos0, _ = sk.forward_kinematics(local, root)
+    rng = np.random.default_rng(7)
+    hits = 0
+    for _ in range(6):
+        targets = {"LeftHand": pos0[sk.index("LeftHand")] + rng.normal(scale=2, size=3),
+                   "Head": pos0[sk.index("Head")] + rng.normal(scale=1, size=3)}
+        r = solve(sk, local, root, targets, method="jacobian_transpose", root="RightFoot",
+                  tol=1e-3)
+        pos, _ = sk.forward_kinematics(r.local_rotations, r.root_position)
+        np.testing.assert_allclose(pos[sk.index("RightFoot")], pos0[sk.index("RightFoot")],
+                                   atol=1e-9)
+        errs = [np.linalg.norm(pos[sk.index(n)] - t) for n, t in targets.items()]
+        np.testing.assert_allclose(max(errs), r.error, atol=1e-9)
+        assert r.converged == (max(errs) < 1e-3)
+        assert r.converged or r.reason == "max_iterations"
+        hits += r.converged
+    assert hits >= 5

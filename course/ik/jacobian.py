@@ -178,14 +178,15 @@ def solve_problem(
     max_step: float = 0.5,
     record: bool = False,
 ) -> tuple[Array, History, list[Array]]:
-    """Iterate one Jacobian method on a :class:`~course.ik._chains.Problem`.
+    r"""Iterate one Jacobian method on a :class:`~course.ik._chains.Problem`.
 
     ``max_step`` caps the largest joint increment per iteration (radians; the step keeps its
     direction), so a far target is approached in several linearised steps. A step that
-    increases the error is undone and the next one halved (backtracking), so the error never
-    grows; with a stalled error the solve stops (``reason="stalled"`` or ``"unreachable"``).
-    ``damping``
-    defaults to 5% of the longest effector path (a length, like the errors it is added to).
+    increases the objective :math:`\lVert\Delta e\rVert` (all effectors' errors together) is
+    undone and the next one halved (backtracking), so it never grows; when it stalls the
+    solve stops (``reason="stalled"``, ``"singular"`` or ``"unreachable"``). ``damping``
+    defaults to 5% of the longest path to an effector (a length, like the errors it is added
+    to).
 
     Returns
     -------
@@ -205,6 +206,9 @@ def solve_problem(
     Rn = problem.Rn
     M, p = problem.forward(Rn)
     e, err = problem.error(M, p)
+    # The objective every step reduces: the length of the whole error vector,
+    # sqrt(sum of squares) (one effector: its error).
+    size = np.sqrt((e * e).sum(axis=1))
     history = History(err, tol, max_iter)
     frames = [Rn] if record else []
     scale = np.ones(problem.batch)
@@ -224,8 +228,11 @@ def solve_problem(
         trial = problem.project(m.step(Rn, M, problem.base, delta))
         M_t, p_t = problem.forward(trial)
         e_t, err_t = problem.error(M_t, p_t)
-        # Backtracking: a step that made things worse is undone and the next one halved.
-        worse = err_t > err
+        size_t = np.sqrt((e_t * e_t).sum(axis=1))
+        # Backtracking: a step that made the objective worse is undone and the next one
+        # halved. (Not the largest effector error: with several effectors a good step may
+        # trade a little of one for much of another.)
+        worse = size_t > size
         scale = np.where(worse, 0.5 * scale, np.minimum(1.0, 2.0 * scale))
         keep = ~worse
         Rn = np.where(keep[:, None, None, None], trial, Rn)
@@ -233,7 +240,8 @@ def solve_problem(
         p = np.where(keep[:, None, None], p_t, p)
         e = np.where(keep[:, None], e_t, e)
         err = np.where(keep, err_t, err)
-        history.update(err)
+        size = np.where(keep, size_t, size)
+        history.update(err, progress=size)
         if record:
             frames.append(Rn)
     if m.n_cols and not history.converged.all():

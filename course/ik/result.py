@@ -78,27 +78,34 @@ class History:
     of problems still running (not converged, not stalled, below ``max_iter``).
     """
 
-    # A problem has stalled when its error fell by less than this fraction of the tolerance
-    # over the last ``window`` iterations.
+    # A problem has stalled when its error (or the objective it minimises) fell by less than
+    # this fraction of the tolerance over the last ``window`` iterations.
     window = 8
 
     def __init__(self, err: Array, tol: float, max_iter: int):
         self.tol, self.max_iter = tol, max_iter
         self.residuals = [err.copy()]
+        self._progress: list[Array] = []
         self.iterations = np.zeros(err.shape, dtype=int)
         self.stalled = np.zeros(err.shape, dtype=bool)
         self.active = (err >= tol) & (max_iter > 0)
         # Set by the Jacobian methods: the final Jacobian has lost rank.
         self.singular = np.zeros(err.shape, dtype=bool)
 
-    def update(self, err: Array) -> Array:
+    def update(self, err: Array, progress: Array | None = None) -> Array:
+        """Record ``err`` (B,); ``progress`` (B,), if given, is the objective the solver
+        reduces (a length), which the stall test watches instead of ``err``."""
         prev = self.residuals[-1]
         err = np.where(self.active, err, prev)
         self.iterations += self.active
         self.residuals.append(err)
-        if len(self.residuals) > self.window:
-            old = self.residuals[-1 - self.window]
-            self.stalled |= self.active & (old - err < 1e-3 * self.tol)
+        watched = self.residuals
+        if progress is not None:
+            self._progress.append(progress)
+            watched = self._progress
+        if len(watched) > self.window:
+            old, new = watched[-1 - self.window], watched[-1]
+            self.stalled |= self.active & (old - new < 1e-3 * self.tol)
         self.active = (err >= self.tol) & ~self.stalled & (self.iterations < self.max_iter)
         return self.active
 
