@@ -367,14 +367,47 @@ def test_fabrik_with_hinges_converges_on_a_planar_arm():
         assert one.converged and one.iterations == batch.iterations[i]
 
 
-@pytest.mark.parametrize("method", ["pseudo_inverse", "dls"])
+@pytest.mark.parametrize("method", ["pseudo_inverse", "dls", "jacobian_transpose", "ccd", "fabrik"])
 @pytest.mark.parametrize("fast", [True, False])
-def test_singular_pose_reported(method, fast, monkeypatch):
-    """A straight chain and a reachable target along it: every Jacobian column is
-    perpendicular to the chain, so no step shortens it; the solve says "singular"."""
+def test_straight_chain_target_on_its_line(method, fast, monkeypatch):
+    """A straight chain and a reachable target on its line: every Jacobian column is
+    perpendicular to the line (no step), FABRIK's points and CCD's turns stay on it. The
+    solvers first bend the chain by a small deterministic turn and then reach, on ball and
+    hinge chains, single and batched, fast path and general model alike."""
     import course.ik.api as api
 
     monkeypatch.setattr(api, "_FAST_PATH", fast)
-    r = solve(BALL, IDENT, np.zeros(3), {"end_effector": [5.0, 0, 0]}, method=method)
+    sk = chain([1.0, 0.5, 2.0, 0.7])
+    ident = np.tile(IDENT[0], (5, 1))
+    targets = np.array([[2.5, 0, 0], [1.5, 0, 0], [-2.0, 0, 0], [0.8, 0, 0]])
+    batch = solve(sk, ident, np.zeros(3), {"end_effector": targets}, method=method)
+    for i, t in enumerate(targets):
+        r = solve(sk, ident, np.zeros(3), {"end_effector": t}, method=method)
+        assert r.converged, (t, r.reason, r.error)
+        pos, _ = sk.forward_kinematics(r.local_rotations)
+        np.testing.assert_allclose(pos, r.positions, atol=1e-9)
+        np.testing.assert_allclose(np.linalg.norm(np.diff(pos, axis=0), axis=1),
+                                   [1.0, 0.5, 2.0, 0.7], atol=1e-9)
+        np.testing.assert_allclose(batch.positions[i], r.positions, atol=1e-9)
+    if method != "fabrik":  # FABRIK's hinge support is for planar chains
+        r = solve(HINGE, IDENT, np.zeros(3), {"end_effector": [5.0, 0, 0]}, method=method)
+        assert r.converged and np.linalg.norm(r.positions[-1] - [5.0, 0, 0]) < 1e-4
+    # Stretched at a target beyond the tip on the line: already the best pose, left straight.
+    far = solve(sk, ident, np.zeros(3), {"end_effector": [6.0, 0, 0]}, method=method)
+    assert far.reason == "unreachable"
+    np.testing.assert_allclose(far.positions[-1], [4.2, 0, 0], atol=1e-9)
+
+
+@pytest.mark.parametrize("method", ["pseudo_inverse", "dls"])
+@pytest.mark.parametrize("fast", [True, False])
+def test_singular_pose_reported(method, fast, monkeypatch):
+    """A planar arm (every hinge about z) and a target out of its plane at a reachable
+    distance: the Jacobian has rank 2 everywhere, no step leaves the plane, so the solve
+    stalls and says "singular"."""
+    import course.ik.api as api
+
+    monkeypatch.setattr(api, "_FAST_PATH", fast)
+    arm = chain([1.0] * 7, axes=[0, 0, 1])
+    r = solve(arm, IDENT, np.zeros(3), {"end_effector": [3.0, 2.0, 2.0]}, method=method)
     assert not r.converged and r.reason == "singular"
-    np.testing.assert_allclose(r.error, 2.0, atol=1e-9)
+    np.testing.assert_allclose(r.error, 2.0, atol=1e-6)  # the in-plane part is reached

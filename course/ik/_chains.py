@@ -361,6 +361,27 @@ def build_model(
     )
 
 
+# The turn (radians) of every joint that first bends a straight path aimed along its own line.
+BEND = 0.05
+
+
+def bend_increment(hinge: NDArray[np.bool_], u: Array) -> Array:
+    r"""Per-column increments, shape (B, C), that bend a straight path of direction ``u``
+    (B, 3, unit): every ball joint turns by :data:`BEND` about the world axis
+    :math:`\hat u \times e_k` perpendicular to the line (:math:`e_k` the coordinate axis of
+    ``u``'s smallest component), every hinge by :data:`BEND` about its own axis.
+
+    Why: along a straight path every Jacobian column :math:`a\times(e - r_i)` is perpendicular
+    to the line, so a target on the line gets no step (:math:`J^T\Delta e = 0`); FABRIK's
+    points and CCD's turns stay on the line too. Practical IK leaves such a singular pose by a
+    small perturbation; this one is deterministic, so a solve is repeatable.
+    """
+    perp = cross(u, np.eye(3)[np.argmin(np.abs(u), axis=-1)])
+    perp = perp / np.maximum(norm(perp), TINY)[..., None]
+    cols = [np.full((len(u), 1), BEND) if h else BEND * perp for h in hinge]
+    return np.concatenate(cols, axis=1) if cols else np.zeros((len(u), 0))
+
+
 def outside_shell(d: Any, far: Any, near: Any, slack: float) -> Any:
     """Whether distances ``d`` from the fixed joint lie outside the shell ``[near, far]`` an
     effector can reach, give or take ``slack`` (floats or arrays)."""
@@ -428,6 +449,32 @@ class Problem:
     def unreachable(self) -> NDArray[np.bool_]:
         """(B,) some position target lies outside the shell its effector can reach."""
         return unreachable_targets(self.model, self.target_pos, self.p0)
+
+    def bend_if_straight(self, Rn: Array, tol: float) -> Array:
+        """Edge rotations bent by :func:`bend_increment` (then projected into the limits) in
+        the problems where some effector's path is straight and its target lies on that line
+        (within ``tol``), not yet reached and not beyond the stretched path's tip (where the
+        straight pose is already the best one); the others unchanged."""
+        m = self.model
+        M, p = self.forward(Rn)
+        root = p[:, :1]
+        tips = p[:, m.effectors]  # (B, E, 3)
+        axis = tips - root
+        length = norm(axis)
+        u = axis / np.maximum(length, TINY)[..., None]
+        on_path = self.model.descendant[:, m.effectors].T  # (E, N)
+        off = norm(cross(p[:, None] - root[:, None], u[:, :, None]))  # (B, E, N)
+        straight = np.where(on_path, off, 0.0).max(axis=-1, initial=0.0) <= m.reach_slack
+        rel = self.target_pos - root
+        stretched = (length >= m.reach_far - m.reach_slack) & (dot(rel, u) >= length)
+        need = (straight & (length > TINY) & (norm(cross(rel, u)) <= tol)
+                & (norm(self.target_pos - tips) >= tol) & ~stretched)  # (B, E)
+        if not need.any():
+            return Rn
+        first = np.argmax(need, axis=1)
+        delta = bend_increment(m.hinge, u[np.arange(len(u)), first])
+        delta = np.where(need.any(axis=1)[:, None], delta, 0.0)
+        return self.project(m.step(Rn, M, self.base, delta))
 
     def project(self, Rn: Array) -> Array:
         """Edge rotations with every variable projected into its limits."""

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ._chains import outside_shell
+from ._chains import bend_increment, outside_shell
 from ._small import TINY
 from .jacobian import lost_rank
 from .result import History
@@ -406,6 +406,37 @@ class SerialChain:
                 out.append((v, None, float(ball_limit[i]), None))
         return out
 
+    def bend_if_straight(self, R: list[Quat], Q: list[Quat], P: list[Vec], base: Quat, p0: Vec,
+                         target: Vec, tol: float, limits: list[tuple], ops: Any
+                         ) -> tuple[list[Quat], list[Quat], list[Vec]]:
+        """As :meth:`course.ik._chains.Problem.bend_if_straight`: ``R`` (with its ``Q`` and
+        ``P``) bent off a straight chain whose target lies on its line, unreached and not
+        beyond the stretched tip; unchanged (and cheap to check) otherwise."""
+        root, tip = P[0], P[-1]
+        axis = sub(tip, root)
+        length = ops.sqrt(dot(axis, axis))
+        u = scale(axis, 1.0 / ops.where(length > TINY, length, 1.0))
+        rel = sub(target, root)
+        off = cross(rel, u)
+        far, _, slack = self.reach
+        stretched = ops.both(length >= far - slack, dot(rel, u) >= length)
+        need = ops.both(ops.both(length > TINY, ops.sqrt(dot(off, off)) <= tol),
+                        ops.both(ops.dist(tip, target) >= tol, ops.invert(stretched)))
+        if not ops.any(need):  # the usual case: the target is off the chain's line
+            return R, Q, P
+        for p in P[1:-1]:
+            off = cross(sub(p, root), u)
+            need = ops.both(need, ops.sqrt(dot(off, off)) <= slack)
+        if not ops.any(need):
+            return R, Q, P
+        hinge = np.array([a is not None for a in self.axes])
+        delta = bend_increment(hinge, np.stack(np.broadcast_arrays(*u), -1).reshape(-1, 3))
+        delta = np.where(np.reshape(need, (-1, 1)), delta, 0.0)
+        R = self.step(R, Q, base, delta[0].tolist() if ops is FLOATS else list(delta.T), ops)
+        if limits:
+            R = self.project(R, limits, ops)
+        return (R, *self.forward(R, base, p0))
+
     def unreachable(self, target: Vec, p0: Vec, ops: Any) -> Any:
         """Whether the target lies outside the shell the effector can reach from ``p0``."""
         e = sub(target, p0)
@@ -524,6 +555,7 @@ def solve_jacobian(
     frames : the local rotations before the first and after every iteration (``record``)
     """
     Q, P = chain.forward(R, base, p0)
+    R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
     e = sub(target, P[-1])
     err = ops.sqrt(dot(e, e))
     history = History(ops.batch(err), tol, max_iter)
@@ -684,6 +716,7 @@ def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target:
     ``record`` fits every iteration's points too. Returns the final local rotations, their
     positions (forward kinematics), the history and the recorded rotations."""
     Q, P = chain.forward(R, base, p0)
+    R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, [], ops)
     e = sub(target, P[-1])
     history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
     points: list | None = [] if record else None
@@ -718,7 +751,8 @@ def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
     n = len(chain.bones)
     axis_of = dict(zip(chain.variables, chain.axes, strict=True))
     limits_of = {v: [lim for lim in limits if lim[0] == v] for v in chain.variables}
-    _, P = chain.forward(R, base, p0)
+    Q, P = chain.forward(R, base, p0)
+    R, _, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
     d, rest = bone_directions(P, ops)
     back = [scale(r, -1.0) for r in rest]
     e = sub(target, P[-1])
@@ -761,6 +795,7 @@ def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Ve
     limits_of = {v: [lim for lim in limits if lim[0] == v] for v in chain.variables}
     order = chain.variables[::-1] if tip_to_root else chain.variables
     Q, P = chain.forward(R, base, p0)
+    R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
     e = sub(target, P[-1])
     history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
     frames = [R] if record else []

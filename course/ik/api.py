@@ -66,6 +66,12 @@ def solve(
     included, moves around it. If all effectors lie below ``root``, its parent frame is held
     and ``R_root`` is a variable (as for an ordinary chain rooted at joint 0).
 
+    A straight path whose target lies on its own line is a singular pose for every iterative
+    method (no Jacobian column points along the line; FABRIK and CCD stay on it): the
+    iterative methods first bend it by a small deterministic turn of each joint
+    (:func:`course.ik._chains.bend_increment`, 0.05 rad), so ``frames[0]`` and
+    ``residuals[0]`` are those of the bent start.
+
     Parameters
     ----------
     skeleton : course.skeleton.Skeleton
@@ -199,6 +205,8 @@ def solve(
         col_weight=col_weight, hinge_limits=hinge_limits, ball_limit=ball_limit,
     )
     problem.Rn = problem.project(problem.Rn)
+    if method != "two_link":
+        problem.Rn = problem.bend_if_straight(problem.Rn, tol)
 
     if method == "two_link":
         Rn_out, history, frames = _two_link(problem, tol, record, **options)
