@@ -152,6 +152,14 @@ def test_pseudo_inverse_forms_match_numpy():
     np.testing.assert_allclose(pinv_svd(tall), np.linalg.pinv(tall), atol=1e-10)
     rank1 = np.outer([1.0, 2, 3], [1.0, 0, 1, 0])
     np.testing.assert_allclose(pinv_svd(rank1), np.linalg.pinv(rank1, rcond=1e-6), atol=1e-12)
+    # Ill-conditioned (singular values 1, 1e-3, 1e-7): both forms are computed from the SVD,
+    # not by inverting JJ^T or J^TJ (whose condition number, 1e14, costs ~5e-3 relative here).
+    U = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    V = np.linalg.qr(rng.normal(size=(7, 7)))[0][:, :3]
+    J = U @ np.diag([1.0, 1e-3, 1e-7]) @ V.T
+    for form, A in ((pinv_wide, J), (pinv_tall, J.T)):
+        ref = np.linalg.pinv(A, rcond=1e-15)
+        assert np.abs(form(A) - ref).max() < 1e-7 * np.abs(ref).max()
     e = rng.normal(size=(4, 3))
     np.testing.assert_allclose(pinv_step(wide, e), np.einsum("bij,bj->bi", np.linalg.pinv(wide), e),
                                atol=1e-10)

@@ -86,18 +86,36 @@ def finite_difference_jacobian(
     return np.stack(cols, axis=-1)
 
 
+def _inverse_square_singular(J: Array) -> tuple[Array, Array, Array]:
+    r"""The thin SVD :math:`J = U\Sigma V^T` of ``J`` (..., m, n), with
+    :math:`\Sigma^{-2}` (:math:`1/\sigma^2`, 0 where :math:`\sigma = 0`)."""
+    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    inv2 = np.where(s > 0, 1.0 / np.where(s > 0, s, 1.0) ** 2, 0.0)
+    return U, inv2, Vt
+
+
 def pinv_wide(J: ArrayLike) -> Array:
-    r""":math:`J^+ = J^T(JJ^T)^{-1}` for full-row-rank ``J`` (..., m, n), m <= n."""
+    r""":math:`J^+ = J^T(JJ^T)^{-1}` for full-row-rank ``J`` (..., m, n), m <= n: the smallest
+    step reaching a reachable error.
+
+    :math:`(JJ^T)^{-1} = U\Sigma^{-2}U^T` is taken from the SVD of ``J`` (never forming and
+    inverting :math:`JJ^T`, whose condition number is the square of ``J``'s), so
+    :math:`J^+ = V\Sigma U^T U\Sigma^{-2}U^T = V\Sigma^{-1}U^T`."""
     J = np.asarray(J, float)
-    Jt = np.swapaxes(J, -1, -2)
-    return Jt @ np.linalg.inv(J @ Jt)
+    U, inv2, _ = _inverse_square_singular(J)
+    return np.swapaxes(J, -1, -2) @ ((U * inv2[..., None, :]) @ np.swapaxes(U, -1, -2))
 
 
 def pinv_tall(J: ArrayLike) -> Array:
-    r""":math:`J^+ = (J^TJ)^{-1}J^T` for full-column-rank ``J`` (..., m, n), m >= n."""
+    r""":math:`J^+ = (J^TJ)^{-1}J^T` for full-column-rank ``J`` (..., m, n), m >= n: the least
+    squares step.
+
+    :math:`(J^TJ)^{-1} = V\Sigma^{-2}V^T` is taken from the SVD of ``J``, so
+    :math:`J^+ = V\Sigma^{-2}V^T V\Sigma U^T = V\Sigma^{-1}U^T`."""
     J = np.asarray(J, float)
-    Jt = np.swapaxes(J, -1, -2)
-    return np.linalg.inv(Jt @ J) @ Jt
+    _, inv2, Vt = _inverse_square_singular(J)
+    V = np.swapaxes(Vt, -1, -2)
+    return ((V * inv2[..., None, :]) @ Vt) @ np.swapaxes(J, -1, -2)
 
 
 def pinv_svd(J: ArrayLike, rcond: float = 1e-6) -> Array:
