@@ -240,3 +240,38 @@ def test_cmu_jacobian_transpose_with_two_effectors(walk):
         assert r.converged or r.reason == "max_iterations"
         hits += r.converged
     assert hits >= 5
+
+
+# --------------------------------------------------------------------------- two-link, hinge knee
+def test_two_link_hinge_knee_out_of_its_plane():
+    """A ball hip and a hinge knee, the knee bent in the yz plane, targets anywhere in reach:
+    the leg's plane is chosen from the knee axis (or through the pole), the hip turns the knee
+    axis onto its normal, and the analytic answer lands exactly (before: 'max_iterations'
+    whenever the target left the knee's current plane)."""
+    from course.skeleton import Ball, Fixed, Hinge, Skeleton
+
+    leg = Skeleton(["hip", "knee", "ankle"], [-1, 0, 1], [[0, 0, 0], [0, -4, 0], [0, -3, 0]],
+                   {"hip": Ball(), "knee": Hinge((1, 0, 0)), "ankle": Fixed()})
+    start = np.tile([1.0, 0, 0, 0], (3, 1))
+    start[1] = [np.cos(0.3), np.sin(0.3), 0, 0]  # knee bent by 0.6 rad about x
+    rng = np.random.default_rng(9)
+    d = rng.normal(size=(40, 3))
+    targets = d / np.linalg.norm(d, axis=1, keepdims=True) * rng.uniform(1.2, 6.8, (40, 1))
+    for pole in (None, [0.0, -4.0, 5.0]):
+        for flip in (False, True):
+            batch = solve(leg, start, np.zeros(3), {"ankle": targets}, method="two_link",
+                          pole=pole, flip=flip)
+            assert batch.converged.all()
+            pos, _ = leg.forward_kinematics(batch.local_rotations)
+            np.testing.assert_allclose(pos, batch.positions, atol=1e-9)
+            np.testing.assert_allclose(pos[:, 2], targets, atol=1e-9)
+            np.testing.assert_allclose(np.linalg.norm(pos[:, 1], axis=1), 4.0, atol=1e-9)
+            # The knee turns about its own axis only.
+            np.testing.assert_allclose(batch.local_rotations[:, 1, 2:], 0.0, atol=1e-12)
+            if pole is not None:  # the knee lies in the plane of the hip, target and pole
+                n = np.cross(targets, pole)
+                np.testing.assert_allclose(np.einsum("bi,bi->b", pos[:, 1], n), 0.0,
+                                           atol=1e-9 * np.linalg.norm(n, axis=1).max())
+            one = solve(leg, start, np.zeros(3), {"ankle": targets[5]}, method="two_link",
+                        pole=pole, flip=flip)
+            np.testing.assert_allclose(one.positions, batch.positions[5], atol=1e-9)

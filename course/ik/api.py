@@ -28,6 +28,7 @@ from ._serial import (
     solve_jacobian,
     unit_like,
 )
+from ._small import TINY, best_rotation, cross, dot, matvec, norm, orthonormalize
 from .result import History, IKResult, Target
 from .two_link import two_link
 
@@ -403,12 +404,57 @@ def _two_link(problem: Problem, tol: float, record: bool, pole: ArrayLike | None
         raise ValueError(
             "method: 'two_link' needs the path from root to the one effector to be two bones "
             f"(three joints), got {m.n_nodes} joints; choose root accordingly")
-    _, p = problem.forward(problem.Rn)
-    history = History(problem.error(*problem.forward(problem.Rn))[1], tol, 1)
-    b, c, _ = two_link(p[:, 0], p[:, 1], p[:, 2], problem.target_pos[:, 0], pole, flip)
-    Rn = problem.fit(problem.Rn, np.stack([p[:, 0], b, c], 1))
+    M, p = problem.forward(problem.Rn)
+    history = History(problem.error(M, p)[1], tol, 1)
+    t = problem.target_pos[:, 0]
+    hip = np.flatnonzero(m.var_nodes == 0)
+    knee = np.flatnonzero(m.var_nodes == 1)
+    if not m.up.any() and len(hip) and len(knee) and not m.hinge[hip[0]] and m.hinge[knee[0]]:
+        Rn, b, c = _two_link_hinge_knee(problem, M, p, t, problem._axes()[knee[0]], pole, flip)
+    else:
+        Rn = problem.Rn
+        b, c, _ = two_link(p[:, 0], p[:, 1], p[:, 2], t, pole, flip)
+    Rn = problem.fit(Rn, np.stack([p[:, 0], b, c], 1))
     history.update(problem.error(*problem.forward(Rn))[1])
     return Rn, history, [problem.Rn, Rn] if record else []
+
+
+def _two_link_hinge_knee(problem: Problem, M: Array, p: Array, t: Array, knee_axis: Array,
+                         pole: ArrayLike | None, flip: bool) -> tuple[Array, Array, Array]:
+    r"""Two-link with a ball root and a hinge middle joint (hip and knee): the leg's plane
+    must be perpendicular to the knee axis, which turns with the hip. So the plane is chosen
+    first: through the root-to-target axis :math:`\hat u` and the pole, or without a pole the
+    plane whose normal is nearest the knee's world axis :math:`a = Q_{hip}\hat a` (its part
+    perpendicular to :math:`\hat u`, bending to the side the knee bends now). The law of
+    cosines places the knee in it (:func:`two_link`), and the hip turns (Kabsch on the two
+    directions) so that its bone points at the new knee and the knee axis along the plane's
+    normal; the knee's own turn about its axis then lands the end on the target.
+
+    Returns the edge rotations with the hip turned, and the new knee and end positions.
+    """
+    a, b0, c0 = p[:, 0], p[:, 1], p[:, 2]
+    axis = matvec(M[:, 0], knee_axis)
+    u = np.where((norm(t - a) > TINY)[:, None], t - a, c0 - a)
+    u = u / np.maximum(norm(u), TINY)[:, None]
+    if pole is None:
+        n = axis - dot(axis, u)[:, None] * u
+        side = cross(u, n)  # a knee bent by a positive turn about n has its joint on this side
+        bent = b0 - a - dot(b0 - a, u)[:, None] * u
+        side = np.where((dot(bent, side) < 0)[:, None], -side, side)
+        planar = norm(n) > 1e-9
+        pole_pt = np.where(planar[:, None], a + side, b0)  # knee axis along u: keep the plane
+    else:
+        pole_pt = np.broadcast_to(as_array(pole, "pole", (3,)), a.shape)
+    b, c, _ = two_link(a, b0, c0, t, pole_pt, flip)
+    n = cross(b - a, c - a)
+    n = np.where((norm(n) > TINY)[:, None], n, cross(u, pole_pt - a))
+    n = n / np.maximum(norm(n), TINY)[:, None]
+    n = np.where((dot(n, axis) < 0)[:, None], -n, n)  # the nearer of the two normals
+    turn = best_rotation(np.stack([b0 - a, axis], 1), np.stack([b - a, n * norm(b0 - a)[:, None]],
+                                                               1))
+    Rn = problem.Rn.copy()
+    Rn[:, 0] = orthonormalize(np.swapaxes(problem.base, -1, -2) @ turn @ M[:, 0])
+    return problem.project(Rn), b, c
 
 
 def _solve_serial(
