@@ -110,6 +110,8 @@ class ChainModel:
         # included), floored so a chain of zero bones still has one.
         to_any = self.descendant[:, np.concatenate([self.effectors, self.rot_effectors])].T
         self.length_scale = max(float((to_any @ lengths).max(initial=0.0)), 1e-9)
+        self.unit_weights = np.ones(self.n_cols)  # every column weighted 1 (shared, read-only)
+        self.unit_weights.flags.writeable = False
         hinge_cols = self.hinge[self.col_var]
         self.hinge_vars = np.flatnonzero(self.hinge)
         self.ball_vars = np.flatnonzero(~self.hinge)

@@ -93,11 +93,8 @@ class _Floats:
     def invert(a: bool) -> bool:
         return not a
 
-    @staticmethod
-    def any(a: bool) -> bool:
-        return a
-
-    all = any
+    # One problem's flags are plain bools already (the builtin is the fastest identity).
+    any = all = staticmethod(bool)
 
     @staticmethod
     def take(x: Any, idx: Any) -> Any:
@@ -263,9 +260,11 @@ def arc_turn(u: Vec, v: Vec, ops: Any) -> Quat:
     they are opposite; the identity when either is shorter than ``TINY`` (as
     :func:`course.ik._small.arc_matrix`). The two special cases are rare, so they are only
     worked out when some problem needs them (FABRIK fits every bone with this)."""
-    uu, vv = dot(u, u), dot(v, v)
+    (ux, uy, uz), (vx, vy, vz) = u, v  # written out: FABRIK fits every bone with this
+    uu, vv = ux * ux + uy * uy + uz * uz, vx * vx + vy * vy + vz * vz
     nn = ops.sqrt(uu * vv)
-    w, (x, y, z) = nn + dot(u, v), cross(u, v)
+    w, x, y, z = (nn + ux * vx + uy * vy + uz * vz, uy * vz - uz * vy, uz * vx - ux * vz,
+                  ux * vy - uy * vx)
     opposite = w <= TINY * nn
     if ops.any(opposite):
         # Turn about u x (the coordinate axis of u's smallest component), as arc_matrix.
@@ -588,14 +587,15 @@ def solve_jacobian(
 def toward(frm: Vec, to: Vec, length: Scalar, fallback: Vec, ops: Any) -> Vec:
     r""":math:`p_{frm} + d\,\widehat{(p_{to} - p_{frm})}`; along ``fallback`` (a unit vector)
     where the two points coincide. (Written out: FABRIK spends its time here.)"""
-    fx, fy, fz = frm
     n = ops.dist(frm, to)
-    ok = n >= TINY
-    if not ops.all(ok):
+    if not ops.all(n >= TINY):
+        ok = n >= TINY
         to = ops.select(ok, to, add(frm, fallback))
         n = ops.where(ok, n, 1.0)
     k = length / n
-    return (fx + (to[0] - fx) * k, fy + (to[1] - fy) * k, fz + (to[2] - fz) * k)
+    fx, fy, fz = frm
+    tx, ty, tz = to
+    return (fx + (tx - fx) * k, fy + (ty - fy) * k, fz + (tz - fz) * k)
 
 
 def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], back: list[Vec],
@@ -604,9 +604,9 @@ def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], back: list[Vec],
     :math:`p_i \leftarrow p_{i+1} + d_i\,\widehat{(p_i - p_{i+1})}` down to the root.
     ``back`` are directions from joint ``i + 1`` to ``i`` to use where two joints coincide."""
     P = list(P)
-    P[-1] = target
+    p = P[-1] = target
     for i in range(len(P) - 2, -1, -1):
-        P[i] = toward(P[i + 1], P[i], d[i], back[i], ops)
+        p = P[i] = toward(p, P[i], d[i], back[i], ops)
     return P
 
 
@@ -617,9 +617,9 @@ def fabrik_pass(P: list[Vec], target: Vec, root: Vec, d: list[Scalar], rest: lis
     d_i\,\widehat{(p_{i+1} - p_i)}`); ``rest`` and ``back`` are the unit bone directions
     (root to tip and back) to use where two joints coincide."""
     P = reach_forward(P, target, d, back, ops)
-    P[0] = root
+    p = P[0] = root
     for i in range(len(P) - 1):
-        P[i + 1] = toward(P[i], P[i + 1], d[i], rest[i], ops)
+        p = P[i + 1] = toward(p, P[i + 1], d[i], rest[i], ops)
     return P
 
 
@@ -631,10 +631,14 @@ def bone_directions(P: list[Vec], ops: Any) -> tuple[list[Scalar], list[Vec]]:
         x, y, z = sub(b, a)
         length = ops.sqrt(x * x + y * y + z * z)
         ok = length > TINY
-        inv = 1.0 / ops.where(ok, length, 1.0)
+        if ops.all(ok):
+            inv = 1.0 / length
+            rest.append((x * inv, y * inv, z * inv))
+        else:
+            inv = 1.0 / ops.where(ok, length, 1.0)
+            rest.append((ops.where(ok, x * inv, 0.0), ops.where(ok, y * inv, 1.0),
+                         ops.where(ok, z * inv, 0.0)))
         d.append(length)
-        rest.append((ops.where(ok, x * inv, 0.0), ops.where(ok, y * inv, 1.0),
-                     ops.where(ok, z * inv, 0.0)))
     return d, rest
 
 
@@ -671,14 +675,20 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any
     for _ in range(max_iter):
         if not ops.any(active):
             break
-        idx = np.flatnonzero(active) if ops is ARRAYS else None
-        Q, t = fabrik_pass(*ops.take((P, target, root, d, rest, back), idx), ops), \
-            ops.take(target, idx)
-        err_q = ops.dist(Q[-1], t)
-        P = ops.put(P, idx, Q)
-        err = ops.put(err, idx, err_q)
-        its = ops.put(its, idx, ops.take(its, idx) + 1)
-        active = ops.put(active, idx, err_q >= tol)
+        if ops.all(active):  # every problem still running
+            P = fabrik_pass(P, target, root, d, rest, back, ops)
+            err = ops.dist(P[-1], target)
+            its = its + 1
+            active = err >= tol
+        else:  # a batch, some problems done: iterate only those still running
+            idx = np.flatnonzero(active)
+            Q, t = fabrik_pass(*ops.take((P, target, root, d, rest, back), idx), ops), \
+                ops.take(target, idx)
+            err_q = ops.dist(Q[-1], t)
+            P = ops.put(P, idx, Q)
+            err = ops.put(err, idx, err_q)
+            its = ops.put(its, idx, ops.take(its, idx) + 1)
+            active = ops.put(active, idx, err_q >= tol)
         if frames is not None:
             frames.append(ops.copy(P))
         if errors is not None:
@@ -727,8 +737,8 @@ def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target:
     fitted = [fit_chain(chain, R, Q, P, base, f, ops) for f in (points if record else [P_new])]
     # Residuals of the fitted poses (honest: what the returned rotations reach); without a
     # record, the points' errors stand for the iterations in between (the fit is exact).
-    if not record and len(errors) > 1:
-        history.residuals += list(np.reshape(errors[:-1], (len(errors) - 1, -1)))
+    if not record:
+        history.residuals += [ops.batch(e) for e in errors[:-1]]
     for _, P in fitted if record else fitted[-1:]:
         history.residuals.append(ops.batch(ops.dist(target, P[-1])))
     history.iterations = np.asarray(ops.batch(its), dtype=int)

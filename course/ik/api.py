@@ -340,6 +340,8 @@ def _model_by_value(skeleton: Any, root: int, eff: tuple,
 
 
 def _weights(skeleton: Any, model: ChainModel, weights: Mapping | None) -> Array:
+    if not weights:
+        return model.unit_weights
     w = np.ones(model.n_cols)
     for key, value in (weights or {}).items():
         j = skeleton.index(key)
@@ -514,11 +516,11 @@ def _solve_serial(
     def pose(R: list, P: list | None = None) -> tuple[Array, Array]:
         """Local rotations (unit, in the starting quaternions' signs) and positions of ``R``;
         ``P``, if given, are the chain's positions of ``R`` already computed."""
+        q = ops.stack([unit_like(q, r, ops) for q, r in zip(R, start, strict=True)], B)
+        if covers:  # every joint is on the chain
+            return q, ops.stack(chain.forward(R, base, p0)[1] if P is None else P, B)
         out = local.copy()
-        out[:, joints] = ops.stack([unit_like(q, r, ops) for q, r in zip(R, start, strict=True)],
-                                   B)
-        if covers:
-            return out, ops.stack(chain.forward(R, base, p0)[1] if P is None else P, B)
+        out[:, joints] = q
         return out, fk.forward_kinematics(skeleton.parents, skeleton.offsets, out, root_pos)[0]
 
     local_out, positions = pose(R, P)

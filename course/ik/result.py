@@ -88,9 +88,9 @@ class History:
         self._progress: list[Array] = []
         self.iterations = np.zeros(err.shape, dtype=int)
         self.stalled = np.zeros(err.shape, dtype=bool)
-        self.active = (err >= tol) & (max_iter > 0)
+        self.active = err >= tol if max_iter > 0 else self.stalled.copy()
         # Set by the Jacobian methods: the final Jacobian has lost rank.
-        self.singular = np.zeros(err.shape, dtype=bool)
+        self.singular = self.stalled.copy()
 
     def update(self, err: Array, progress: Array | None = None) -> Array:
         """Record ``err`` (B,); ``progress`` (B,), if given, is the objective the solver
@@ -120,6 +120,8 @@ class History:
     def reasons(self, unreachable: Array) -> NDArray[np.str_]:
         """Why each problem stopped: ``""`` converged, else the most informative reason."""
         converged = self.converged
+        if converged.all():
+            return np.zeros(converged.shape, dtype="<U14")  # all ""
         out = np.full(converged.shape, "max_iterations", dtype="<U14")
         out[self.stalled] = "stalled"
         # Singular only where the solve stalled on a lost-rank Jacobian: one that merely ran
