@@ -43,6 +43,16 @@ def _set_sliders(sliders: dict[str, widgets.Widget], position: Array) -> None:
         s.value = float(np.clip(position[k], s.min, s.max))
 
 
+def _side_by_side(*children: widgets.Widget) -> widgets.HBox:
+    """A row of panels that keep their width (the sliders and their numbers stay readable)
+    beside views that shrink to fit a narrow notebook (see ``SkeletonScene.widget``)."""
+    for child in children:
+        if child.layout.min_width is None:  # a panel: fixed
+            child.layout.flex = "0 0 auto"
+    return widgets.HBox(list(children), layout=widgets.Layout(align_items="flex-start",
+                                                              gap="12px"))
+
+
 def _on_value(widget: widgets.Widget, handler: Any) -> None:
     """Call ``handler(change)`` when ``widget.value`` changes, on the thread that renders."""
     widget.observe(latest_on_gl_thread(handler), names="value")
@@ -112,7 +122,7 @@ class RotationExplorer(Control):
         self.gimbal = GimbalFigure(order, np.radians(a_deg))
         self.gimbal_image = widgets.Image(format="png", width=340)
         controls = widgets.VBox([self.order, *self.sliders.values(), self.warning, self.readout])
-        self.widget = widgets.HBox([controls, self.scene.widget(), self.gimbal_image])
+        self.widget = _side_by_side(controls, self.scene.widget(), self.gimbal_image)
         for w in (self.order, *self.sliders.values()):
             _on_value(w, self._changed)
         self._changed()
@@ -186,7 +196,7 @@ class SlerpExplorer(Control):
         self.arc = SlerpArcFigure(self.q0, self.q1, t=t)
         self.arc_image = widgets.Image(format="png", width=330)
         left = widgets.VBox([*self.sliders.values(), self.readout])
-        self.widget = widgets.VBox([self.scene.widget(), widgets.HBox([left, self.arc_image])])
+        self.widget = widgets.VBox([self.scene.widget(), _side_by_side(left, self.arc_image)])
         for name, s in self.sliders.items():
             _on_value(s, self._changed_t if name == "t" else self._changed_ends)
         self._changed_ends()
@@ -304,7 +314,7 @@ class FKExplorer(Control):
         left = widgets.VBox([self.reset_button, self.accordion, self.readout],
                             layout=widgets.Layout(width="400px", max_height="540px",
                                                   overflow="auto"))
-        self.widget = widgets.HBox([left, self.scene.widget()])
+        self.widget = _side_by_side(left, self.scene.widget())
         self._joint = next(iter(j for j, a in self.axes.items() if len(a)), 0)
         self._show_readout()
 
@@ -515,7 +525,7 @@ class IKPlayground(Control):
             _on_value(self.sliders[name], lambda _c: self.solve())
         _on_value(self.sliders["iteration"], lambda c: self.show_iteration(c["new"]))
         left = widgets.VBox([*self.sliders.values(), self.readout, self.convergence_image])
-        self.widget = widgets.HBox([left, self.scene.widget()])
+        self.widget = _side_by_side(left, self.scene.widget())
         self.solve()
 
     @property
@@ -641,8 +651,8 @@ class FullBodyIK(Control):
             _on_value(self.sliders[k], lambda _c: self.solve())
         for c in "xyz":
             _on_value(self.sliders[c], lambda _c: self._target_moved())
-        self.widget = widgets.HBox([widgets.VBox([*self.sliders.values(), self.readout]),
-                                    self.scene.widget()])
+        self.widget = _side_by_side(widgets.VBox([*self.sliders.values(), self.readout]),
+                                    self.scene.widget())
         self._load_target()
 
     def _effectors_changed(self) -> None:

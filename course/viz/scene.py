@@ -600,7 +600,9 @@ class SkeletonScene:
                 import ipywidgets as widgets
 
                 w, h = self.plotter.window_size
-                self._widget = widgets.Image(format="png", width=w, height=h)
+                # as wide as the window, narrower when the notebook is (aspect kept)
+                self._widget = widgets.Image(format="png", width=w, height=h, layout=widgets.Layout(
+                    max_width="100%", height="auto", min_width="320px", flex="0 1 auto"))
                 self.render()
             else:
                 self._widget = on_gl_thread(self._trame_view)
@@ -617,9 +619,11 @@ class SkeletonScene:
             )
         print("".join(line for line in out.getvalue().splitlines(keepends=True)
                       if not line.startswith("Using wasm_dir:")), end="")
-        # the iframe is as wide as its box, which in a control's HBox would shrink to nothing
+        # the iframe is as wide as its box (keeping its aspect): the window's width, narrower
+        # when the notebook is, never nothing
         view.layout.width = f"{self.plotter.window_size[0]}px"
-        view.layout.flex = "0 0 auto"
+        view.layout.min_width = "320px"
+        view.layout.flex = "0 1 auto"
         return view
 
     def show(self) -> None:
