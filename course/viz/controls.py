@@ -49,8 +49,8 @@ def _side_by_side(*children: widgets.Widget) -> widgets.HBox:
     for child in children:
         if child.layout.min_width is None:  # a panel: fixed
             child.layout.flex = "0 0 auto"
-    return widgets.HBox(list(children), layout=widgets.Layout(align_items="flex-start",
-                                                              gap="12px"))
+            child.layout.margin = "0 12px 0 0"
+    return widgets.HBox(list(children), layout=widgets.Layout(align_items="flex-start"))
 
 
 def _on_value(widget: widgets.Widget, handler: Any) -> None:
