@@ -9,10 +9,10 @@ too) is timed ``REPEATS`` times and its fastest time kept, so that other process
 machine weigh on neither side; the iterations and success are those of the solve itself.
 
 The ``joints`` column says which joint model a row solves. The issue's chain is the hinge
-chain, and every method runs on it. FABRIK is a ball-joint algorithm (it moves points, and a
-chain of 3D hinges is not one it handles: see the FABRIK docstring), so its speed goal is
-measured on the same 7 bones with ball joints, where it reaches every target; CCD is shown on
-both. Run: ``.venv/bin/python benchmarks/ik.py``.
+chain, and every method runs on it. FABRIK is a ball-joint algorithm (it moves points; on
+hinges its backward pass turns each hinge by a least-squares fit, slower: see the FABRIK
+docstring), so its speed goal is measured on the same 7 bones with ball joints, its own case;
+CCD is shown on both. Run: ``.venv/bin/python benchmarks/ik.py``.
 """
 
 from __future__ import annotations

@@ -348,10 +348,10 @@ def _hinge_angles(local: np.ndarray) -> np.ndarray:
 
 
 def test_fabrik_with_hinges_converges_on_a_planar_arm():
-    """Parallel hinges (the lecture's 2D arm): the backward pass turns each hinge exactly onto
-    the reached point, so hinge-constrained FABRIK is plain 2D FABRIK and converges. Seeded
-    reachable targets in the plane: all reached to 1e-4 (measured: 200 of 200, median 6
-    iterations), single and batched, each pose a pure turn about z."""
+    """Parallel hinges (the lecture's 2D arm): the backward pass turns each hinge about z onto
+    the reached points of the chain below it. Seeded reachable targets in the plane: all
+    reached to 1e-4 (measured: 200 of 200, median 7 iterations), single and batched, each
+    pose a pure turn about z."""
     arm = chain([1.0] * 7, axes=[0, 0, 1])
     rng = np.random.default_rng(17)
     q = np.tile(IDENT, (40, 1, 1))
@@ -365,6 +365,24 @@ def test_fabrik_with_hinges_converges_on_a_planar_arm():
         one = solve(arm, IDENT, np.zeros(3), {"end_effector": targets[i]}, method="fabrik")
         _check_pose(arm, one)
         assert one.converged and one.iterations == batch.iterations[i]
+
+
+def test_fabrik_with_hinges_about_different_axes():
+    """The 3D hinge chain (axes y, z, y, ...): a hinge cannot aim its bone at a point off its
+    plane, so each one takes the turn that brings the whole chain below it closest to the
+    reached points. Measured on 200 seeded targets: 199 reached to 1e-4, median 20 iterations
+    (aiming the next bone alone: none). Here 40 targets, single and batched, hinges kept."""
+    targets = _reachable_targets(40, seed=18)
+    batch = solve(HINGE, IDENT, np.zeros(3), {"end_effector": targets}, method="fabrik")
+    assert batch.converged.mean() >= 0.95
+    np.testing.assert_allclose(batch.residuals[-1], np.linalg.norm(batch.positions[:, -1] - targets,
+                                                                   axis=1), atol=1e-9)
+    for i in (0, 13):
+        one = solve(HINGE, IDENT, np.zeros(3), {"end_effector": targets[i]}, method="fabrik")
+        _check_pose(HINGE, one)
+        np.testing.assert_allclose(one.positions, batch.positions[i], atol=1e-9)
+        R = matrix_from_quat(one.local_rotations[:7])
+        np.testing.assert_allclose(np.einsum("jab,jb->ja", R, AXES), AXES, atol=1e-9)
 
 
 @pytest.mark.parametrize("method", ["pseudo_inverse", "dls", "jacobian_transpose", "ccd", "fabrik"])

@@ -86,6 +86,9 @@ class ChainModel:
     fit_local: Array = field(repr=False)  # (N, K, 3)
     fit_weight: Array = field(repr=False)  # (N, K)
     pivot: NDArray[np.int_] = field(repr=False)  # (N,) node each node's edge turns about
+    # For fitting a hinge: every node its edge moves (padded with node 0, weight 0).
+    moved_nodes: NDArray[np.int_] = field(repr=False)  # (N, K2)
+    moved_weight: Array = field(repr=False)  # (N, K2)
 
     def __post_init__(self) -> None:
         self.any_up = bool(self.up.any())
@@ -348,6 +351,13 @@ def build_model(
         for i, (c, vec) in enumerate(f):
             fit_nodes[u, i], fit_local[u, i], fit_weight[u, i] = c, vec, 1.0
     pivot = np.array([parent[u] if up[u] else u for u in range(N)], dtype=int)
+    # Going down an edge turns the nodes strictly below it, going up the node itself too.
+    moved = [[w for w in range(N) if descendant[u, w] and (w != u or up[u])] for u in range(N)]
+    K2 = max(1, max(len(x) for x in moved))
+    moved_nodes = np.zeros((N, K2), dtype=int)
+    moved_weight = np.zeros((N, K2))
+    for u, x in enumerate(moved):
+        moved_nodes[u, :len(x)], moved_weight[u, :len(x)] = x, 1.0
 
     levels = [np.flatnonzero(np.array([depth[int(j)] for j in joints]) == k)
               for k in range(max(depth.values()) + 1)]
@@ -360,6 +370,7 @@ def build_model(
         col_frame=np.array(col_frame, dtype=int), pos_mask=pos_mask, rot_mask=rot_mask,
         levels=levels, ancestors=ancestors, descendant=descendant,
         fit_nodes=fit_nodes, fit_local=fit_local, fit_weight=fit_weight, pivot=pivot,
+        moved_nodes=moved_nodes, moved_weight=moved_weight,
     )
 
 
@@ -494,7 +505,9 @@ class Problem:
         from its parent, :math:`M_u = M_{parent} F_u`, is turned about the node's pivot by the
         rotation that best maps the current offsets of the nodes it places onto the wanted
         ones: the shortest arc for one offset (so the bone keeps its previous twist), Kabsch
-        for several (a branching joint), or the turn about the hinge axis for a hinge.
+        for several (a branching joint). A hinge cannot aim a bone at a point off its plane:
+        it takes the turn about its axis that brings every node it moves (the whole subtree,
+        not only its child) closest to the wanted positions, least squares.
         Hinge ranges and ball limits are enforced on the way, so later levels see the
         constrained pose.
 
@@ -515,6 +528,8 @@ class Problem:
         up = m.up
         F = Rn.copy()
         F[:, up] = np.swapaxes(Rn[:, up], -1, -2)
+        if m.hinge.any():  # the starting pose: where each hinge's subtree hangs in its frame
+            M_old, p_old = self.forward(Rn)
         M = np.empty_like(Rn)
         p = np.empty((B, m.n_nodes, 3))
         p[:, 0] = self.p0
@@ -539,9 +554,16 @@ class Problem:
                     frame = np.where(up[nodes][:, None, None], Mv, Mpar[:, sel])
                     axis = matvec(frame, self._axes()[v])  # (B, n, 3)
                     a = axis[:, :, None]
-                    c = cross(cur - dot(cur, a)[..., None] * a, want - dot(want, a)[..., None] * a)
-                    num = (dot(a, c) * wt).sum(-1)
-                    den = (dot(cur - dot(cur, a)[..., None] * a, want) * wt).sum(-1)
+                    # The moved nodes' offsets from the pivot, in the node's frame (constant
+                    # while it turns), carried by its new orientation; and where they are wanted.
+                    moved, piv = m.moved_nodes[nodes], m.pivot[nodes]
+                    to_new = Mv @ np.swapaxes(M_old[:, nodes], -1, -2)
+                    h_cur = matvec(to_new[:, :, None], p_old[:, moved] - p_old[:, piv][:, :, None])
+                    h_want = wanted[:, moved] - p[:, piv][:, :, None]
+                    h_wt = m.moved_weight[nodes]
+                    flat = h_cur - dot(h_cur, a)[..., None] * a
+                    num = (dot(a, cross(flat, h_want)) * h_wt).sum(-1)
+                    den = (dot(flat, h_want) * h_wt).sum(-1)
                     Rh = rotvec_matrix(axis * np.arctan2(num, den)[..., None])
                     R = np.where(hinge[:, None, None], Rh, R)
                 Fv = orthonormalize(np.swapaxes(Mpar[:, sel], -1, -2) @ (R @ Mv))

@@ -318,20 +318,39 @@ def aim(R: Quat, parent: Quat, axis: Vec | None, u: Vec, w: Vec, ops: Any,
     :math:`\mathrm{atan2}(a\cdot(u\times w),\ u\cdot w - (u\cdot a)(w\cdot a))`, so
     :math:`R \leftarrow \exp(\theta\hat a) R`; a ball joint by the shortest arc ``q`` from
     ``u`` to ``w``, a world turn, so :math:`R \leftarrow Q_{i-1}^{-1} q\, Q_{i-1} R`.
-    ``max_angle`` caps the turn. The result is renormalised: CCD and FABRIK turn every joint
-    hundreds of times, and rounding must not build up in its length.
+    ``max_angle`` caps the turn. The result is renormalised (:func:`_unit`).
     """
     if axis is not None:
-        a = qrot(parent, axis)
-        theta = ops.atan2(dot(a, cross(u, w)), dot(u, w) - dot(u, a) * dot(w, a))
-        if max_angle is not None:
-            theta = ops.minimum(ops.maximum(theta, -max_angle), max_angle)
-        qw, qx, qy, qz = qmul(axis_turn(axis, theta, ops), R)
-    else:
-        turn = arc_turn(u, w, ops)
-        if max_angle is not None:
-            turn = cap_angle(turn, max_angle, ops)
-        qw, qx, qy, qz = qmul(qmul(qconj(parent), qmul(turn, parent)), R)
+        return hinge_turn(R, parent, axis, [u], [w], ops, max_angle)
+    turn = arc_turn(u, w, ops)
+    if max_angle is not None:
+        turn = cap_angle(turn, max_angle, ops)
+    return _unit(qmul(qmul(qconj(parent), qmul(turn, parent)), R), ops)
+
+
+def hinge_turn(R: Quat, parent: Quat, axis: Vec, us: list[Vec], ws: list[Vec], ops: Any,
+               max_angle: float | None = None) -> Quat:
+    r"""Turn a hinge (``axis`` :math:`\hat a` in the parent frame, world
+    :math:`a = Q_{i-1}\hat a`) by the angle that best turns the world offsets ``us`` (from its
+    pivot) onto ``ws``, least squares: :math:`\mathrm{atan2}(\sum_k a\cdot(u_k\times w_k),\
+    \sum_k u_k\cdot w_k - (u_k\cdot a)(w_k\cdot a))`; for one pair the angle between their
+    projections on the hinge's plane. :math:`R \leftarrow \exp(\theta\hat a) R`, renormalised;
+    ``max_angle`` caps :math:`|\theta|`."""
+    a = qrot(parent, axis)
+    num = den = 0.0
+    for u, w in zip(us, ws, strict=True):
+        num = num + dot(a, cross(u, w))
+        den = den + dot(u, w) - dot(u, a) * dot(w, a)
+    theta = ops.atan2(num, den)
+    if max_angle is not None:
+        theta = ops.minimum(ops.maximum(theta, -max_angle), max_angle)
+    return _unit(qmul(axis_turn(axis, theta, ops), R), ops)
+
+
+def _unit(q: Quat, ops: Any) -> Quat:
+    """``q`` renormalised: CCD and FABRIK turn every joint hundreds of times, and rounding must
+    not build up in its length."""
+    qw, qx, qy, qz = q
     inv = 1.0 / ops.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
     return (qw * inv, qx * inv, qy * inv, qz * inv)
 
@@ -751,12 +770,15 @@ def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
                         tol: float, max_iter: int, limits: list[tuple], record: bool,
                         ops: Any) -> tuple[list[Quat], list[Vec], History, list]:
     r"""FABRIK with joint constraints (hinges, limits): forward reaching on the points
-    (:func:`reach_forward`), then the backward pass in joint space, root to tip: with the
-    parent placed (:math:`Q_{i-1}`, :math:`p_i` by forward kinematics) joint ``i`` turns its
-    bone :math:`Q_{i-1}R_i l_{i+1}` towards the reached point :math:`p'_{i+1}` (:func:`aim`:
-    a hinge about its axis, in its plane) and is projected into its limit. Every iteration
-    ends on a real pose, so its residual is honest. On a planar chain of parallel hinges
-    (the lecture's 2D arm) every turn is exact and this is plain FABRIK in the plane.
+    (:func:`reach_forward`), then the backward pass in joint space, root to tip, with the
+    parent placed (:math:`Q_{i-1}`, :math:`p_i` by forward kinematics). A ball joint turns its
+    bone :math:`Q_{i-1}R_i l_{i+1}` onto the reached point :math:`p'_{i+1}` (:func:`aim`). A
+    hinge cannot point its bone at a point off its plane; it turns about its axis by the angle
+    that brings the whole chain below it closest to the reached points
+    :math:`p'_{i+1}, \dots, p'_n` (:func:`hinge_turn`, least squares): with the next bone
+    alone a chain of hinges about different axes stalls far from the target. Each joint is
+    then projected into its limit. Every iteration ends on a real pose, so its residual is
+    honest.
     """
     n = len(chain.bones)
     axis_of = dict(zip(chain.variables, chain.axes, strict=True))
@@ -775,9 +797,18 @@ def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
             if i:
                 p = add(p, qrot(q, chain.bones[i]))
             P_new.append(p)
-            if i in axis_of:
+            if i in axis_of and axis_of[i] is None:  # a ball: its bone at the reached point
                 u = qrot(qmul(q, new[i]), chain.bones[i + 1])
-                new[i] = aim(new[i], q, axis_of[i], u, sub(reached[i + 1], p), ops)
+                new[i] = aim(new[i], q, None, u, sub(reached[i + 1], p), ops)
+            elif i in axis_of:  # a hinge: the chain below it as close as it can to its points
+                qj, pj, us, ws = qmul(q, new[i]), p, [], []
+                for j in range(i + 1, n):
+                    pj = add(pj, qrot(qj, chain.bones[j]))
+                    qj = qmul(qj, new[j])
+                    us.append(sub(pj, p))
+                    ws.append(sub(reached[j], p))
+                new[i] = hinge_turn(new[i], q, axis_of[i], us, ws, ops)
+            if i in axis_of:
                 new = chain.project(new, limits_of[i], ops)
             q = qmul(q, new[i])
         e_new = sub(target, P_new[-1])

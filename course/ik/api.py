@@ -97,8 +97,9 @@ def solve(
         Jacobian methods: the regulariser :math:`W` (larger: the joint moves less).
     limits : mapping joint -> (lo, hi) or float, optional
         Hinge angle range in radians, or the largest rotation angle of a ball joint's local
-        rotation. Enforced by projection after each step (CCD, Jacobian) or joint placement
-        (FABRIK, two-link).
+        rotation (swing and twist together: the bone stays in a cone of that half-angle about
+        its rest direction, and its twist is capped as well). Enforced by projection after
+        each step (CCD, Jacobian) or joint placement (FABRIK, two-link).
     record : bool
         Keep every iteration's pose in ``result.frames``.
     **options
