@@ -227,7 +227,7 @@ def solve_problem(
     # The objective every step reduces: the length of the whole error vector,
     # sqrt(sum of squares) (one effector: its error).
     size = np.sqrt((e * e).sum(axis=1))
-    history = History(err, tol, max_iter)
+    history = History(err, tol, max_iter, progress=size)
     frames = [Rn] if record else []
     scale = np.ones(problem.batch)
     while history.active.any() and m.n_cols:

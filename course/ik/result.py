@@ -82,10 +82,12 @@ class History:
     # this fraction of the tolerance over the last ``window`` iterations.
     window = 8
 
-    def __init__(self, err: Array, tol: float, max_iter: int):
+    def __init__(self, err: Array, tol: float, max_iter: int, progress: Array | None = None):
+        """``progress`` (B,), if given, is the starting objective the stall test then watches
+        (see :meth:`update`)."""
         self.tol, self.max_iter = tol, max_iter
         self.residuals = [err.copy()]
-        self._progress: list[Array] = []
+        self._progress: list[Array] = [] if progress is None else [progress.copy()]
         self.iterations = np.zeros(err.shape, dtype=int)
         self.stalled = np.zeros(err.shape, dtype=bool)
         self.active = err >= tol if max_iter > 0 else self.stalled.copy()
