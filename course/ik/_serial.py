@@ -260,7 +260,7 @@ def arc_turn(u: Vec, v: Vec, ops: Any) -> Quat:
     they are opposite; the identity when either is shorter than ``TINY`` (as
     :func:`course.ik._small.arc_matrix`). The two special cases are rare, so they are only
     worked out when some problem needs them (FABRIK fits every bone with this)."""
-    (ux, uy, uz), (vx, vy, vz) = u, v  # written out: FABRIK fits every bone with this
+    (ux, uy, uz), (vx, vy, vz) = u, v
     uu, vv = ux * ux + uy * uy + uz * uz, vx * vx + vy * vy + vz * vz
     nn = ops.sqrt(uu * vv)
     w, x, y, z = (nn + ux * vx + uy * vy + uz * vz, uy * vz - uz * vy, uz * vx - ux * vz,
