@@ -34,9 +34,15 @@ TOL = 1e-4
 N_TARGETS = 200
 REPEATS = 3
 # (method, joint model, goal as a speed-up over ikpy or None)
-ROWS = [("dls", "hinge", 25), ("pseudo_inverse", "hinge", 25), ("jacobian_transpose", "hinge",
-        None), ("ccd", "hinge", None), ("fabrik", "hinge", None), ("ccd", "ball", None),
-        ("fabrik", "ball", 80)]
+ROWS = [
+    ("dls", "hinge", 25),
+    ("pseudo_inverse", "hinge", 25),
+    ("jacobian_transpose", "hinge", None),
+    ("ccd", "hinge", None),
+    ("fabrik", "hinge", None),
+    ("ccd", "ball", None),
+    ("fabrik", "ball", 80),
+]
 SKELETONS = {"hinge": HINGE, "ball": BALL}
 
 
