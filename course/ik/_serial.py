@@ -603,18 +603,33 @@ def solve_jacobian(
 
 
 # --------------------------------------------------------------------------- FABRIK
-def toward(frm: Vec, to: Vec, length: Scalar, fallback: Vec, ops: Any) -> Vec:
-    r""":math:`p_{frm} + d\,\widehat{(p_{to} - p_{frm})}`; along ``fallback`` (a unit vector)
-    where the two points coincide. (Written out: FABRIK spends its time here.)"""
-    n = ops.dist(frm, to)
-    if not ops.all(n >= TINY):
-        ok = n >= TINY
-        to = ops.select(ok, to, add(frm, fallback))
-        n = ops.where(ok, n, 1.0)
-    k = length / n
-    fx, fy, fz = frm
-    tx, ty, tz = to
-    return (fx + (tx - fx) * k, fy + (ty - fy) * k, fz + (tz - fz) * k)
+def follow(P: list[Vec], first: int, step: int, d: list[Scalar], fallback: list[Vec],
+           ops: Any) -> list[Vec]:
+    r"""Pull the points after ``P[first]`` (``step = +1``: towards the tip, ``-1``: towards the
+    root) one by one back to their bone lengths:
+    :math:`p_j \leftarrow p_i + d\,\widehat{(p_j - p_i)}`, with :math:`p_i` the point just
+    placed and :math:`d` the bone between them; where the two coincide, along ``fallback`` of
+    that bone (a unit vector). FABRIK spends its time here, so the update is written out
+    in components, once for both directions."""
+    P = list(P)
+    sqrt, all_, where = ops.sqrt, ops.all, ops.where
+    fx, fy, fz = P[first]
+    j = first + step
+    bone = first if step > 0 else first - 1
+    for _ in range(first if step < 0 else len(P) - 1 - first):
+        tx, ty, tz = P[j]
+        dx, dy, dz = tx - fx, ty - fy, tz - fz
+        n = sqrt(dx * dx + dy * dy + dz * dz)
+        if not all_(n >= TINY):  # coinciding points: the bone's fallback direction
+            ok = n >= TINY
+            gx, gy, gz = fallback[bone]
+            dx, dy, dz, n = where(ok, dx, gx), where(ok, dy, gy), where(ok, dz, gz), \
+                where(ok, n, 1.0)
+        k = d[bone] / n
+        fx, fy, fz = P[j] = (fx + dx * k, fy + dy * k, fz + dz * k)
+        j += step
+        bone += step
+    return P
 
 
 def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], back: list[Vec],
@@ -623,10 +638,8 @@ def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], back: list[Vec],
     :math:`p_i \leftarrow p_{i+1} + d_i\,\widehat{(p_i - p_{i+1})}` down to the root.
     ``back`` are directions from joint ``i + 1`` to ``i`` to use where two joints coincide."""
     P = list(P)
-    p = P[-1] = target
-    for i in range(len(P) - 2, -1, -1):
-        p = P[i] = toward(p, P[i], d[i], back[i], ops)
-    return P
+    P[-1] = target
+    return follow(P, len(P) - 1, -1, d, back, ops)
 
 
 def fabrik_pass(P: list[Vec], target: Vec, root: Vec, d: list[Scalar], rest: list[Vec],
@@ -636,10 +649,8 @@ def fabrik_pass(P: list[Vec], target: Vec, root: Vec, d: list[Scalar], rest: lis
     d_i\,\widehat{(p_{i+1} - p_i)}`); ``rest`` and ``back`` are the unit bone directions
     (root to tip and back) to use where two joints coincide."""
     P = reach_forward(P, target, d, back, ops)
-    p = P[0] = root
-    for i in range(len(P) - 1):
-        p = P[i + 1] = toward(p, P[i + 1], d[i], rest[i], ops)
-    return P
+    P[0] = root
+    return follow(P, 0, 1, d, rest, ops)
 
 
 def bone_directions(P: list[Vec], ops: Any) -> tuple[list[Scalar], list[Vec]]:
