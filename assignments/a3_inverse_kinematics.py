@@ -68,6 +68,11 @@ def ccd(positions: np.ndarray, target: np.ndarray, tol: float, max_iter: int) ->
     .. math::
         p_k \leftarrow r_i + R\,(p_k - r_i)\qquad (k > i).
 
+    When :math:`e - r_i` and :math:`t - r_i` point in opposite directions their cross product
+    is zero, yet the turn is a half turn (angle :math:`\pi`), not none: use any axis
+    perpendicular to :math:`e - r_i`. (With :math:`e` or :math:`t` on the joint itself there is
+    no direction to turn to: skip the joint.)
+
     Sweep until :math:`\lVert e - t\rVert \le tol`, at most ``max_iter`` sweeps.
 
     Parameters

@@ -21,15 +21,16 @@ from .protocol import Value
 Array = NDArray[np.float64]
 
 
-def show(x: Array) -> str:
-    """An array on one short line, 3 decimals, trailing zeros dropped: ``[0.5, -1, 0]``."""
+def show(x: Array, digits: int = 3) -> str:
+    """An array on one short line, ``digits`` decimals, trailing zeros dropped:
+    ``[0.5, -1, 0]``."""
     a = np.asarray(x, dtype=float)
     if a.ndim == 0:
-        v = f"{a:.3f}".rstrip("0").rstrip(".") if np.isfinite(a) else str(a)
+        v = f"{a:.{digits}f}".rstrip("0").rstrip(".") if np.isfinite(a) else str(a)
         return "0" if v == "-0" else v
     if a.size > 24:
         return f"<array of shape {a.shape}>"
-    return "[" + ", ".join(show(v) for v in a) + "]"
+    return "[" + ", ".join(show(v, digits) for v in a) + "]"
 
 
 @dataclass(frozen=True)
@@ -124,11 +125,27 @@ class Check:
             return False
         return bool(np.all(np.abs(a[fa] - b[fb]) <= self._tolerance(b[fb])))
 
-    def show_value(self, x: Array) -> str:
-        return show(x)
+    def difference(self, got: Any, expected: Any) -> float:
+        """The largest entry of |got - expected| (for :meth:`decimals`)."""
+        return float(np.max(np.abs(np.subtract(got, expected))))
 
-    def show_expected(self, expected: Array) -> str:
-        return show(expected)
+    def decimals(self, got: Any, expected: Any) -> int:
+        """How many decimals show where ``got`` and ``expected`` differ: 3, or more when they
+        agree to 3 decimals (up to 12)."""
+        try:
+            diff = self.difference(got, expected)
+        except (TypeError, ValueError):  # names, or shapes that differ
+            return 3
+        if not np.isfinite(diff) or diff <= 0:
+            return 3
+        return int(np.clip(np.ceil(-np.log10(diff)) + 1, 3, 12))
+
+    def show_value(self, x: Array, digits: int = 3) -> str:
+        """``x`` for a message, with ``digits`` decimals."""
+        return show(x, digits)
+
+    def show_expected(self, expected: Array, digits: int = 3) -> str:
+        return show(expected, digits)
 
     def rotation(self, x: Array) -> Array | None:
         """A 3x3 rotation to picture ``x`` by, or None if the output is not a rotation."""
@@ -174,8 +191,12 @@ class QuatCheck(Check):
         rows = zip(np.reshape(a, (-1, 4)), np.reshape(b, (-1, 4)), strict=True)
         return all(Check.close(self, x, y) or Check.close(self, x, -y) for x, y in rows)
 
-    def show_expected(self, expected: Array) -> str:
-        return ("±" if np.ndim(expected) == 1 else "") + show(expected)
+    def difference(self, got: Any, expected: Any) -> float:
+        """Up to sign: q and -q print differently but are one rotation."""
+        return min(super().difference(got, expected), super().difference(got, -expected))
+
+    def show_expected(self, expected: Array, digits: int = 3) -> str:
+        return ("±" if np.ndim(expected) == 1 else "") + show(expected, digits)
 
     def rotation(self, x: Array) -> Array | None:
         if np.ndim(x) != 1:
@@ -277,10 +298,10 @@ class StringsCheck(Check):
     def close(self, a, b) -> bool:  # type: ignore[override]
         return tuple(a) == tuple(b)
 
-    def show_value(self, x) -> str:  # type: ignore[override]
+    def show_value(self, x, digits: int = 3) -> str:  # type: ignore[override]
         return _show_names(x)
 
-    def show_expected(self, expected) -> str:  # type: ignore[override]
+    def show_expected(self, expected, digits: int = 3) -> str:  # type: ignore[override]
         return _show_names(expected)
 
 
@@ -341,9 +362,13 @@ class TupleCheck(Check):
     def close(self, a, b) -> bool:  # type: ignore[override]
         return all(c.close(x, y) for c, x, y in zip(self.items, a, b, strict=True))
 
-    def show_value(self, x) -> str:  # type: ignore[override]
-        return "(" + ", ".join(c.show_value(v) for c, v in zip(self.items, x, strict=True)) + ")"
+    def difference(self, got, expected) -> float:  # type: ignore[override]
+        return max(c.difference(g, e) for c, g, e in zip(self.items, got, expected, strict=True))
 
-    def show_expected(self, expected) -> str:  # type: ignore[override]
-        return "(" + ", ".join(c.show_expected(e) for c, e in zip(self.items, expected,
-                                                                  strict=True)) + ")"
+    def show_value(self, x, digits: int = 3) -> str:  # type: ignore[override]
+        return "(" + ", ".join(c.show_value(v, digits) for c, v in zip(self.items, x,
+                                                                       strict=True)) + ")"
+
+    def show_expected(self, expected, digits: int = 3) -> str:  # type: ignore[override]
+        return "(" + ", ".join(c.show_expected(e, digits) for c, e in zip(self.items, expected,
+                                                                          strict=True)) + ")"

@@ -1,73 +1,98 @@
 """The sandboxed side: load one submission, call its functions on inputs, report results.
 
-Run by :mod:`autograder.sandbox` as ``python -I -S -B -u child.py CONFIG_JSON`` in a fresh
-temporary directory with a minimal environment (no path to the course, no seed). Before
-the submission is loaded it
+Run by :mod:`autograder.sandbox` as ``python -I -S -B -u child.py CONFIG_JSON`` from a copy
+of this file in the submission's temporary directory (never from the repository), with a
+minimal environment (no path to the course, no seed). On Linux it usually runs inside
+fresh namespaces whose file system holds only the interpreter, numpy and the working
+directory (see :mod:`autograder.sandbox`). Before the submission is loaded it
 
 1. lowers its own CPU-time, address-space and file-size limits (soft = hard, so the
    submission cannot raise them again);
-2. imports numpy from the one directory the grader names, then drops site-packages from
-   ``sys.path`` (so ``course``, ``scipy`` and the grader are not even findable);
+2. keeps ``ctypes`` from loading at all (numpy would import it, and ctypes reads any
+   address in memory without raising an audit event), imports numpy from the one directory
+   the grader names, then drops site-packages from ``sys.path`` (so ``course``, ``scipy``
+   and the grader are not even findable);
 3. installs an audit hook (which Python cannot remove) refusing imports outside numpy and
-   the harmless standard library, process creation and signals, sockets, ctypes, files
-   outside the allowed directories, and tampering with the hook itself.
+   the harmless standard library, process creation and signals, sockets, ctypes, changing
+   the working directory, symbolic links, directories and files outside the allowed ones
+   (``site-packages`` excluded), and replacing code objects. Everything the hook uses is
+   bound when it is installed, as immutable default arguments and C functions (no closure
+   cells, no globals), so a submission that rebinds builtins, ``os.path`` or this module's
+   globals, or reads the hook's frame from a refusal's traceback, changes nothing.
 
-It then answers requests on a dedicated pipe (never stdout), one frame per case, so the
-grader knows exactly which case crashed or hung; each frame carries the request's random
-nonce, so frames forged by the submission are recognised. Everything is judged in the
-grader.
+Modules numpy itself loaded (``inspect``, ``importlib``, ``pickle``) stay reachable through
+``sys.modules``; none of them reaches outside the process. The child then answers requests
+on a dedicated pipe (never stdout), one frame per case, so the grader knows exactly which
+case crashed or hung; each frame carries the request's random nonce, so frames forged by
+the submission are recognised. Everything is judged in the grader.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import sys
 import traceback
+import types
+from collections.abc import Callable
 
-# Standard-library modules a submission may not load: processes, signals, sockets, native
-# code, and introspection that could reach into this script.
+# Standard-library modules a submission may not load: processes, sockets, native code,
+# limits, and introspection that could reach into this script. (Other modules import
+# ``signal``, ``gc``, ``shutil`` and ``urllib.parse``, so they load; what they could do that
+# matters is refused by audit event, and the network needs ``socket``. numpy.testing imports
+# ``subprocess``, so it does not load.)
 BLOCKED_STDLIB = frozenset({
     "subprocess", "_posixsubprocess", "multiprocessing", "_multiprocessing", "concurrent",
-    "socket", "_socket", "ssl", "_ssl", "http", "urllib", "ftplib", "smtplib", "asyncio",
-    "ctypes", "_ctypes", "pty", "signal", "resource", "gc", "inspect", "importlib",
-    "pickle", "_pickle", "marshal", "shutil",
+    "socket", "_socket", "ssl", "_ssl", "http", "ftplib", "smtplib", "asyncio",
+    "ctypes", "_ctypes", "pty", "resource", "inspect", "importlib", "pickle", "_pickle",
+    "marshal",
 })
-# Audit events refused outright: new processes, signals, network, native code, gc walks.
+# Audit events refused outright: new processes, signals, network, native code, gc walks,
+# tracing, limits, the working directory and symbolic links (both would let a path checked
+# here mean another file by the time the kernel opens it). sys._getframe stays allowed
+# (collections.namedtuple needs it): the frames it reaches hold nothing to gain, the
+# request's nonce included, which lets a submission forge only its own answers.
 BLOCKED_EVENTS = frozenset({
     "os.system", "os.exec", "os.posix_spawn", "os.spawn", "os.fork", "os.forkpty",
     "os.kill", "os.killpg", "signal.pthread_kill", "subprocess.Popen", "pty.spawn",
-    "ctypes.dlopen", "ctypes.dlsym", "ctypes.cdata", "ctypes.call_function",
-    "ctypes.addressof", "gc.get_objects", "gc.get_referrers", "gc.get_referents",
-    "sys.setprofile", "sys.settrace", "sys._getframe", "os.chroot", "os.setuid",
+    "gc.get_objects", "gc.get_referrers", "gc.get_referents", "sys.setprofile",
+    "sys.settrace", "sys._current_frames", "sys._current_exceptions",
+    "os.chroot", "os.setuid", "resource.setrlimit", "resource.prlimit", "os.chdir",
+    "os.symlink",
 })
-# Events with one path argument that must stay inside the sandbox directory.
+# Audit events with path arguments that must stay inside the working directory.
 PATH_EVENTS = frozenset({
-    "os.listdir", "os.scandir", "os.chdir", "os.remove", "os.rmdir", "os.mkdir", "os.chmod",
-    "os.chown", "os.truncate", "os.utime", "os.link", "os.symlink", "os.rename", "shutil.rmtree",
-    "os.chflags", "os.lchflags", "os.setxattr", "os.removexattr", "os.listxattr", "os.getxattr",
+    "os.remove", "os.rmdir", "os.mkdir", "os.chmod", "os.chown", "os.truncate", "os.utime",
+    "os.link", "os.rename", "shutil.rmtree", "os.chflags", "os.lchflags", "os.setxattr",
+    "os.removexattr", "os.mkfifo", "os.mknod",
 })
+# Audit events with a path argument that must be readable: listing a directory.
+LIST_EVENTS = frozenset({"os.listdir", "os.scandir", "os.listxattr", "os.getxattr"})
+CODE_ATTRIBUTES = frozenset({"__code__", "__defaults__", "__kwdefaults__", "__globals__"})
 
 
 def main() -> None:
     config = json.loads(sys.argv[1])
-    del sys.argv[1:]
+    sys.argv[:] = ["child.py"]
+    os.chdir(config["cwd"])  # under the sandbox's chroot the process starts in "/"
     req, res = config["req_fd"], config["res_fd"]
     _limit(config)
+    sys.modules["ctypes"] = None  # type: ignore[assignment]  (numpy copes without it)
     sys.path.append(config["numpy_path"])
     import numpy  # noqa: F401  (loaded before the hook; the submission reuses it)
     import numpy.linalg  # noqa: F401
 
-    protocol = _load_protocol()
+    protocol = _load_module("_autograder_protocol", config["protocol"])
     sys.path[:] = [p for p in sys.path if p != config["numpy_path"] and "site-packages" not in p]
-    sandbox = os.path.realpath(os.getcwd())
-    readable = (sandbox, os.path.dirname(os.path.realpath(os.__file__)),
-                *(os.path.realpath(p) for p in config["numpy_dirs"]))
-    _install_hook(sandbox, readable, _allowed_modules(config["allowed"]))
-
+    stdlib = os.path.realpath(os.path.dirname(os.__file__))
+    sys.addaudithook(make_hook(
+        writable=os.path.realpath(config["cwd"]),
+        readable=(*(os.path.realpath(p) for p in config["numpy_dirs"]), stdlib),
+        hidden=tuple(os.path.join(stdlib, d) for d in ("site-packages", "dist-packages")),
+        allowed=_allowed_modules(config["allowed"]),
+    ))
     try:
-        module = _load(config["submission"])
+        module = _load_module("submission", config["submission"])
     except BaseException as exc:  # noqa: B036  (SystemExit at import is the submission's)
         protocol.write_frame(res, {"op": "load_error", "error": _describe(exc, config)})
         return
@@ -82,8 +107,10 @@ def main() -> None:
 
 
 def _limit(config: dict) -> None:
-    import resource
-
+    try:
+        import resource
+    except ImportError:  # not a POSIX system: the grader's wall clock still holds
+        return
     cpu, mem = int(config["cpu_seconds"]), int(config["memory_mb"]) << 20
     for limit, value in ((resource.RLIMIT_CPU, cpu), (resource.RLIMIT_AS, mem),
                          (resource.RLIMIT_FSIZE, 16 << 20), (resource.RLIMIT_CORE, 0)):
@@ -91,14 +118,16 @@ def _limit(config: dict) -> None:
             resource.setrlimit(limit, (value, value))
         except (ValueError, OSError):  # macOS refuses RLIMIT_AS; the wall clock still holds
             pass
+    del sys.modules["resource"]  # a submission importing it again meets the audit hook
 
 
-def _load_protocol():
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "protocol.py")
-    spec = importlib.util.spec_from_file_location("_autograder_protocol", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
+def _load_module(name: str, path: str) -> types.ModuleType:
+    with open(path, encoding="utf-8") as f:
+        code = compile(f.read(), path, "exec")
+    module = types.ModuleType(name)
+    module.__file__ = path
+    sys.modules[name] = module
+    exec(code, module.__dict__)
     return module
 
 
@@ -106,46 +135,132 @@ def _allowed_modules(extra: list[str]) -> frozenset[str]:
     return frozenset(sys.stdlib_module_names - BLOCKED_STDLIB) | frozenset(extra)
 
 
-def _install_hook(sandbox: str, readable: tuple[str, ...], allowed: frozenset[str]) -> None:
-    realpath, fspath, sep = os.path.realpath, os.fsdecode, os.sep
+def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
+              allowed: frozenset[str]) -> Callable[[str, tuple], None]:
+    """The audit hook. ``writable``: the working directory; ``readable``: the directories a
+    submission may read (numpy's first, then the standard library, whose ``hidden``
+    site-packages stay out of reach).
 
-    def inside(path, roots) -> bool:
-        if isinstance(path, int):  # an already open descriptor
+    The hook and its helpers have no closure cells and read no global or builtin name:
+    everything they use is a default argument, bound now, and either immutable (str, tuple,
+    frozenset) or a C function. A refusal's traceback shows the hook's frame and so its
+    arguments, but nothing in them can be changed, and changing a function's ``__code__`` or
+    ``__defaults__`` is itself refused.
+    """
+
+    encoding = sys.getfilesystemencoding()
+
+    def resolve(path, type_=type, str_=str, bytes_=bytes, int_=int, decode=bytes.decode,
+                encoding=encoding, startswith=str.startswith,
+                getcwd=os.getcwd, lstat=os.lstat, readlink=os.readlink,
+                item=tuple.__getitem__, oserror=OSError, refuse=PermissionError):
+        """``path`` made absolute with ``.``, ``..`` and symbolic links resolved as the
+        kernel would; None for an open descriptor. Only exact str and bytes are accepted:
+        a str subclass or an os.PathLike could show this check one path and open() another.
+        """
+        kind = type_(path)
+        if kind is int_:
+            return None
+        if kind is bytes_:
+            path = decode(path, encoding, "surrogateescape")
+        elif kind is not str_:
+            raise refuse("the autograder only lets submissions name files by a plain str or "
+                         "bytes path")
+        if not startswith(path, "/"):
+            path = getcwd() + "/" + path
+        todo = path.split("/")
+        todo.reverse()
+        done = []
+        hops = 0
+        while todo:
+            part = todo.pop()
+            if part == "" or part == ".":
+                continue
+            if part == "..":
+                if done:
+                    done.pop()
+                continue
+            here = "/".join(["", *done, part])
+            try:
+                mode = item(lstat(here), 0)  # st_mode, read past any patched attribute
+            except oserror:  # not there (yet): nothing to follow
+                mode = 0
+            if mode & 0o170000 == 0o120000:  # a symbolic link
+                hops += 1
+                if hops > 40:
+                    raise refuse(f"too many symbolic links in {path!r}")
+                target = readlink(here)
+                if startswith(target, "/"):
+                    done = []
+                more = target.split("/")
+                more.reverse()
+                todo.extend(more)
+                continue
+            done.append(part)
+        return "/" + "/".join(done)
+
+    def within(p, roots, startswith=str.startswith):
+        for r in roots:
+            if p == r or startswith(p, r + "/"):
+                return True
+        return False
+
+    def may_read(p, writable=writable, numpy_dirs=readable[:-1], stdlib=readable[-1:],
+                 hidden=hidden, within=within):
+        if p == "/dev/null" or within(p, (writable,)) or within(p, numpy_dirs):
             return True
-        p = realpath(fspath(path))
-        return any(p == r or p.startswith(r + sep) for r in roots) or p == "/dev/null"
+        return within(p, stdlib) and not within(p, hidden)
 
-    def hook(event: str, args: tuple) -> None:
+    def hook(event, args, resolve=resolve, within=within, may_read=may_read,
+             writable=(writable,), allowed=allowed, blocked=BLOCKED_EVENTS,
+             path_events=PATH_EVENTS, list_events=LIST_EVENTS, code_attributes=CODE_ATTRIBUTES,
+             write_flags=os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_TRUNC,
+             type_=type, str_=str, int_=int, bool_=bool, stat=os.stat, item=tuple.__getitem__,
+             startswith=str.startswith, oserror=OSError, refuse=PermissionError,
+             refuse_import=ImportError):
         if event == "import":
-            top = str(args[0]).partition(".")[0]
-            if top not in allowed:
-                raise ImportError(
-                    f"importing {args[0]!r} is not allowed here: use numpy and the "
-                    "Python standard library only")
+            name = args[0]
+            if type_(name) is not str_ or name.partition(".")[0] not in allowed:
+                raise refuse_import(
+                    f"importing {name!r} is not allowed here: use numpy and the Python "
+                    "standard library only")
         elif event == "open":
             path, mode, flags = args
-            writing = (mode is not None and any(c in mode for c in "wax+")) or (
-                mode is None and flags & (os.O_WRONLY | os.O_RDWR | os.O_CREAT))
-            if path is not None and not inside(path, (sandbox,) if writing else readable):
-                raise PermissionError(f"the autograder does not let submissions open {path!r}")
-        elif event in BLOCKED_EVENTS or event.startswith("socket."):
-            raise PermissionError(f"the autograder does not let submissions use {event}")
-        elif event in PATH_EVENTS:
-            paths = [a for a in args[:2] if isinstance(a, (str, bytes, os.PathLike))]
-            if not all(inside(p, (sandbox,)) for p in paths):
-                raise PermissionError(f"the autograder does not let submissions use {event} "
-                                      "outside their working directory")
-        elif event == "object.__setattr__" and args[0] is hook:
-            raise PermissionError("the autograder's guard cannot be modified")
+            p = resolve(path) if path is not None else None
+            if p is None:  # an open descriptor
+                return
+            writing = flags & write_flags != 0
+            if mode is not None:
+                for c in "wax+":
+                    if c in mode:
+                        writing = True
+            if not (within(p, writable) or p == "/dev/null") if writing else not may_read(p):
+                raise refuse(f"the autograder does not let submissions open {path!r}")
+            try:
+                is_dir = item(stat(p), 0) & 0o170000 == 0o040000
+            except oserror:
+                is_dir = False
+            if is_dir and not within(p, writable):
+                # A descriptor of a directory elsewhere would let dir_fd= paths (which this
+                # hook sees relative to the working directory) reach outside it.
+                raise refuse(f"the autograder does not let submissions open the directory "
+                             f"{path!r}")
+        elif event in blocked or startswith(event, "socket.") or startswith(event, "ctypes."):
+            raise refuse(f"the autograder does not let submissions use {event}")
+        elif event in path_events or event in list_events:
+            for a in args:
+                if a is None or type_(a) is int_ or type_(a) is bool_:  # modes, fds, flags
+                    continue
+                p = resolve(a)
+                if p is not None and not (may_read(p) if event in list_events
+                                          else within(p, writable)):
+                    raise refuse(f"the autograder does not let submissions use {event} "
+                                 "outside their working directory")
+        elif (event == "object.__setattr__" or event == "object.__delattr__") and (
+                args[1] in code_attributes):
+            raise refuse("the autograder does not let submissions replace code objects")
 
-    sys.addaudithook(hook)
-
-
-def _load(path: str):
-    spec = importlib.util.spec_from_file_location("submission", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return hook
 
 
 def _call(protocol, fn, args: list, i: int, config: dict) -> dict:

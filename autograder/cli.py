@@ -10,6 +10,7 @@ from pathlib import Path
 from .assignments import KEYS, load
 from .grading import collect, grade
 from .runner import default_submission, run, seed_from_env
+from .sandbox import ISOLATION_NOTES, isolation
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -48,6 +49,10 @@ def main(argv: list[str] | None = None) -> int:
     if not seed:
         print("warning: no --seed or $AUTOGRADER_SEED: grading the visible tests only",
               file=sys.stderr)
+    if isolation() != "namespaces":
+        print(f"warning: isolation is weaker on this machine ({isolation()}): "
+              f"{ISOLATION_NOTES[isolation()].strip('()')} Grade on Linux with user namespaces "
+              "for a private file system per submission.", file=sys.stderr)
     start = time.monotonic()
     rows = grade(spec, submissions, args.out, jobs=args.jobs, seed=seed)
     mean = sum(r["score"] for r in rows) / len(rows)

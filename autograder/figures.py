@@ -1,8 +1,11 @@
-"""A picture of the first failing case: the student's rotation beside the expected one.
+"""A picture of the first failing case, for the HTML report.
 
-Each rotation is drawn as the axis triad it turns the world axes into (x red, y green,
-z blue), with the world axes faint behind it. matplotlib is imported only here, and only
-when a report is drawn.
+A rotation (a1) is drawn as the axis triad it turns the world axes into (x red, y green,
+z blue), the student's beside the expected one, with the world axes faint behind. A joint
+tree (a2's skeletons, a3's chains) is drawn twice, in 3D and seen from the front (x right,
+y up, as in BVH): yours solid, the expected one dashed, the pose the call started from faint,
+and the targets marked. matplotlib is imported only here, only when a report is drawn, and
+draws off screen (the Agg canvas), so it works headless and in a kernel alike.
 """
 
 from __future__ import annotations
@@ -12,32 +15,63 @@ import io
 
 import numpy as np
 
-from .runner import Result
+from .runner import CaseResult, Result, TestResult
+from .spec import Picture
 
 AXIS_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
+YOURS, EXPECTED, START = "#e8710a", "#1f6fd1", "#b8c0c8"
+MARKERS = ("#cf222e", "#8250df", "#1a7f37", "#6e7781")
 
 
 def first_failure_png(result: Result) -> tuple[str, str] | None:
-    """(caption, base64 PNG) of the first failing case whose output is a rotation, if any."""
+    """(caption, base64 PNG) of the first failing case that can be pictured, if any."""
     for t in result.tests:
         for c in t.cases:
             if c.passed or c.got is None:
                 continue
-            check = t.function.check
-            got, want = check.rotation(c.got), check.rotation(c.expected)
-            if got is not None and want is not None:
-                caption = f"{t.test.name}, {c.case.label}: your rotation and the expected one"
-                return caption, _triads_png(got, want)
+            drawn = _draw(t, c)
+            if drawn:
+                return drawn
     return None
 
 
+def _draw(t: TestResult, c: CaseResult) -> tuple[str, str] | None:
+    fn = t.function
+    where = f"{t.test.name}, {c.case.label}"
+    if fn.picture is not None:
+        try:
+            with np.errstate(all="ignore"):
+                picture = fn.picture(c.got, c.expected, c.case.args)
+        except (ValueError, IndexError, TypeError):  # an answer too broken to draw
+            picture = None
+        if picture is not None and _finite(picture):
+            return f"{where}: {picture.what}", _trees_png(picture)
+        return None
+    got, want = fn.check.rotation(c.got), fn.check.rotation(c.expected)
+    if got is not None and want is not None:
+        return f"{where}: your rotation and the expected one", _triads_png(got, want)
+    return None
+
+
+def _finite(p: Picture) -> bool:
+    arrays = [p.yours, p.expected, *(a for _, a in p.points)]
+    return all(a is not None and np.all(np.isfinite(a)) for a in arrays)
+
+
+def _figure(size: tuple[float, float]):
+    from matplotlib.figure import Figure  # the Agg canvas: no display needed
+
+    return Figure(figsize=size, dpi=80)
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", bbox_inches="tight")
+    return base64.b64encode(buf.getvalue()).decode()
+
+
 def _triads_png(got: np.ndarray, want: np.ndarray) -> str:
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(7, 3.4), dpi=80)
+    fig = _figure((7, 3.4))
     for k, (R, title) in enumerate(((got, "yours"), (want, "expected"))):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
         for i, colour in enumerate(AXIS_COLOURS):
@@ -47,6 +81,45 @@ def _triads_png(got: np.ndarray, want: np.ndarray) -> str:
         ax.set(xlim=(-1, 1), ylim=(-1, 1), zlim=(-1, 1), xlabel="x", ylabel="y", zlabel="z",
                title=title)
         ax.set_box_aspect((1, 1, 1))
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", bbox_inches="tight")
-    return base64.b64encode(buf.getvalue()).decode()
+    return _png(fig)
+
+
+def _bones(parents: np.ndarray, positions: np.ndarray):
+    """(start, end) of every bone, as pairs of points."""
+    return [(positions[p], positions[j]) for j, p in enumerate(parents) if 0 <= p < j]
+
+
+def _trees_png(p: Picture) -> str:
+    """3D view (y drawn up) and front view (x, y) of the trees and markers of ``p``."""
+    fig = _figure((8, 3.8))
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 2, 2)
+    trees = [(p.yours, p.parents, YOURS, "-", 2.5, "yours"),
+             (p.expected, p.parents if p.expected_parents is None else p.expected_parents,
+              EXPECTED, "--", 2.0, "expected")]
+    if p.start is not None:
+        trees.insert(0, (p.start, p.parents if p.expected_parents is None
+                         else p.expected_parents, START, "-", 1.5, "start"))
+    for positions, parents, colour, style, width, label in trees:
+        for k, (a, b) in enumerate(_bones(parents, positions)):
+            name = label if k == 0 else None
+            ax3.plot([a[0], b[0]], [a[2], b[2]], [a[1], b[1]], style, color=colour, lw=width,
+                     label=name)
+            ax2.plot([a[0], b[0]], [a[1], b[1]], style, color=colour, lw=width, label=name)
+        ax3.scatter(positions[:, 0], positions[:, 2], positions[:, 1], color=colour, s=8)
+        ax2.plot(positions[:, 0], positions[:, 1], ".", color=colour, ms=4)
+    for (label, pts), colour in zip(p.points, MARKERS, strict=False):
+        pts = np.atleast_2d(pts)
+        style = {"marker": "x" if len(pts) == 1 else ".", "s": 60 if len(pts) == 1 else 10}
+        ax3.scatter(pts[:, 0], pts[:, 2], pts[:, 1], color=colour, label=label, **style)
+        ax2.scatter(pts[:, 0], pts[:, 1], color=colour, label=label, **style)
+    everything = np.vstack([t[0] for t in trees] + [np.atleast_2d(a) for _, a in p.points])
+    lo, hi = everything.min(axis=0), everything.max(axis=0)
+    centre, half = (lo + hi) / 2, max(float(np.max(hi - lo)) / 2, 1e-3) * 1.1
+    ax3.set(xlim=(centre[0] - half, centre[0] + half), ylim=(centre[2] - half, centre[2] + half),
+            zlim=(centre[1] - half, centre[1] + half), xlabel="x", ylabel="z", zlabel="y",
+            title="3D (y up)")
+    ax3.set_box_aspect((1, 1, 1))
+    ax2.set(aspect="equal", xlabel="x", ylabel="y", title="front view")
+    ax2.legend(fontsize=7, loc="best", frameon=False)
+    return _png(fig)

@@ -16,7 +16,7 @@ from typing import TextIO
 
 from .report import csv_header, csv_row, gradescope, write_csv
 from .runner import Result, TestResult, prepare, run
-from .sandbox import DEFAULT_LIMITS, Limits
+from .sandbox import DEFAULT_LIMITS, Limits, isolation
 from .spec import Assignment
 
 SUFFIXES = (".py", ".ipynb")
@@ -63,6 +63,7 @@ def grade(assignment: Assignment, submissions: list[tuple[str, Path]], out: Path
     """Grade every submission; write ``out/<name>/results.json`` and ``out/grades.csv``."""
     out.mkdir(parents=True, exist_ok=True)
     prepare(assignment, seed)  # once, before the threads start
+    isolation()  # probed once, too
     bar = Progress(len(submissions), progress)
     rows: dict[str, dict] = {}
     header = None

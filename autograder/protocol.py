@@ -61,6 +61,8 @@ def read_frame(fd: int, deadline: float | None = None) -> Any | None:
         return json.loads(body)
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ProtocolError(f"not JSON ({exc})") from None
+    except RecursionError:  # '[[[[...' nested deeper than the parser goes: forged
+        raise ProtocolError("JSON nested too deeply") from None
 
 
 def _read_exactly(fd: int, n: int, deadline: float | None) -> bytes | None:
@@ -151,8 +153,11 @@ class Value:
     text: str = ""
 
 
-def decode_value(obj: Any) -> Value:
-    """Rebuild a :class:`Value` from the child's JSON, rejecting anything malformed."""
+def decode_value(obj: Any, depth: int = 0) -> Value:
+    """Rebuild a :class:`Value` from the child's JSON, rejecting anything malformed (nested
+    deeper than :func:`encode_value` writes, say)."""
+    if depth > 3:
+        raise ProtocolError("value nested too deeply")
     try:
         kind = obj["kind"]
         type_name = str(obj.get("type", ""))[:60]
@@ -168,7 +173,8 @@ def decode_value(obj: Any) -> Value:
             items = obj["items"]
             if not isinstance(items, list) or len(items) > 64:
                 raise ProtocolError("bad sequence")
-            return Value("seq", type_name, items=tuple(decode_value(i) for i in items))
+            return Value("seq", type_name, items=tuple(decode_value(i, depth + 1)
+                                                       for i in items))
         if kind == "array":
             shape = tuple(obj["shape"])
             data = obj["data"]

@@ -14,15 +14,24 @@ from pathlib import Path
 from typing import Any
 
 from .runner import Result, TestResult, describe_args
+from .sandbox import ISOLATION_NOTES
 
 BADGE = {"passed": "PASS", "partial": "PART", "failed": "FAIL", "not_implemented": "TODO",
          "not_run": "----"}
+STOPPED = ("timeout", "crash")  # fatal outcomes that concern one case (garbage voids a test)
 COLOURS = {"passed": "#1a7f37", "partial": "#b35900", "failed": "#cf222e",
            "not_implemented": "#6e7781", "not_run": "#6e7781"}
 
 
 def _points(x: float) -> str:
     return f"{x:.2f}".rstrip("0").rstrip(".") if x != int(x) else f"{int(x)}"
+
+
+def _score(t: TestResult) -> str:
+    """``0.5/1``, or ``n/m`` cases for an unscored test."""
+    if not t.test.points:
+        return f"{t.n_passed}/{len(t.cases)} cases"
+    return f"{_points(t.score)}/{_points(t.test.points)}"
 
 
 def test_lines(t: TestResult) -> list[str]:
@@ -43,6 +52,13 @@ def test_lines(t: TestResult) -> list[str]:
     lines += [f"First failing case ({first.case.label}):",
               f"  {t.function.name}({describe_args(t.function, first.case)})",
               f"  {first.reason}"]
+    stopped = [c for c in t.cases if c.kind in STOPPED and c is not first]
+    if stopped:  # which other cases ran out of time or crashed (the first may not have)
+        said = [c.case.label if c.reason == first.reason else f"{c.case.label} ({c.reason})"
+                for c in stopped[:3]]
+        more = f" and {len(stopped) - 3} more" if len(stopped) > 3 else ""
+        same = " (the same)" if all(c.reason == first.reason for c in stopped) else ""
+        lines.append(f"Also stopped the interpreter{same}: {'; '.join(said)}{more}")
     return lines
 
 
@@ -53,9 +69,9 @@ def header(result: Result) -> list[str]:
         lines.append("Visible tests only: hidden tests run when your instructor grades "
                      "(with a secret seed).")
     lines += [f"Refused: {p}" for p in result.problems]
-    if result.isolation == "plain":
-        lines.append("(No Linux namespaces here: the sandbox still limits time, memory, files "
-                     "and imports.)")
+    lines += [f"Note: {n}" for n in result.notes]
+    if ISOLATION_NOTES.get(result.isolation):
+        lines.append(ISOLATION_NOTES[result.isolation])
     return lines
 
 
@@ -71,8 +87,7 @@ def text(result: Result, width: int = 100) -> str:
     out = header(result) + [""]
     name_w = max((len(t.test.name) for t in result.tests), default=10)
     for t in result.tests:
-        score = f"{_points(t.score)}/{_points(t.test.points)}"
-        out.append(f"  {BADGE[t.status]}  {t.test.name:<{name_w}}  {score:>7}")
+        out.append(f"  {BADGE[t.status]}  {t.test.name:<{name_w}}  {_score(t):>7}")
         if t.status == "passed":
             continue
         lines = test_lines(t)
@@ -101,8 +116,7 @@ def html(result: Result) -> str:
         detail = "" if t.status == "passed" else "<br>".join(esc(s) for s in test_lines(t))
         rows.append(
             f"<tr><td style='color:{colour};font-weight:bold'>{BADGE[t.status]}</td>"
-            f"<td>{esc(t.test.name)}</td><td style='text-align:right'>"
-            f"{_points(t.score)}/{_points(t.test.points)}</td>"
+            f"<td>{esc(t.test.name)}</td><td style='text-align:right'>{_score(t)}</td>"
             f"<td style='text-align:left;font-size:90%'>{detail}</td></tr>")
     head = "<br>".join(esc(s) for s in header(result))
     scope = _scope(result)
@@ -121,10 +135,16 @@ def html(result: Result) -> str:
     )
 
 
+def _scored(result: Result) -> list[TestResult]:
+    """The tests that count: unscored ones run on data only some machines have, so the
+    class's results leave them out and are the same wherever they are graded."""
+    return [t for t in result.tests if t.test.points]
+
+
 def gradescope(result: Result) -> dict[str, Any]:
     """The submission's ``results.json`` in Gradescope's autograder format."""
     tests = []
-    for t in result.tests:
+    for t in _scored(result):
         tests.append({
             "name": t.test.name,
             "score": round(t.score, 4),
@@ -147,19 +167,19 @@ CSV_FIXED = ["submission", "score", "max_score", "status", "misconceptions", "se
 
 
 def csv_header(result: Result) -> list[str]:
-    return CSV_FIXED + [t.test.name for t in result.tests]
+    return CSV_FIXED + [t.test.name for t in _scored(result)]
 
 
 def csv_row(name: str, result: Result) -> dict[str, Any]:
     status = "refused" if result.problems else "graded"
-    found = sorted({f"{t.test.function}:{t.misconception.key}" for t in result.tests
+    found = sorted({f"{t.test.function}:{t.misconception.key}" for t in _scored(result)
                     if t.misconception})
     row: dict[str, Any] = {
         "submission": name, "score": round(result.score, 4), "max_score": result.max_score,
         "status": status, "misconceptions": " ".join(found),
         "seconds": round(result.elapsed, 2),
     }
-    row.update({t.test.name: round(t.score, 4) for t in result.tests})
+    row.update({t.test.name: round(t.score, 4) for t in _scored(result)})
     return row
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -18,7 +19,7 @@ import numpy as np
 from .checks import show
 from .sandbox import DEFAULT_LIMITS, Limits, Outcome, Sandbox, isolation
 from .spec import Assignment, Case, Function, Misconception, Test, case_rng
-from .submission import SubmissionError, import_problems, read_source
+from .submission import Source, SubmissionError, import_problems, read_source
 
 ASSIGNMENTS_DIR = Path(__file__).resolve().parents[1] / "assignments"
 
@@ -28,8 +29,8 @@ class CaseResult:
     """One case: passed or not, why not (one line), and the output if it had the right shape.
 
     ``kind`` is ``"pass"``, ``"wrong"`` (a valid answer that differs), ``"invalid"`` (wrong
-    type, shape, NaN...), ``"error"``, ``"not_implemented"``, ``"timeout"``, ``"crash"``,
-    ``"garbage"`` or ``"skipped"``.
+    type, shape, NaN...), ``"error"`` (``error`` holds its type and message),
+    ``"not_implemented"``, ``"timeout"``, ``"crash"``, ``"garbage"`` or ``"skipped"``.
     """
 
     case: Case
@@ -37,6 +38,7 @@ class CaseResult:
     reason: str = ""
     got: Any = None
     expected: Any = None
+    error: dict[str, Any] | None = None
 
     @property
     def passed(self) -> bool:
@@ -85,6 +87,7 @@ class Result:
     tests: list[TestResult]
     hidden_run: bool
     problems: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
     output: str = ""
     elapsed: float = 0.0
     isolation: str = ""
@@ -124,14 +127,16 @@ class Prepared:
 
 @lru_cache(maxsize=16)
 def prepare(assignment: Assignment, seed: str | None) -> tuple[Prepared, ...]:
-    """The tests to run: all visible ones, and the hidden ones when there is a seed."""
+    """The tests to run: all visible ones, and the hidden ones when there is a seed (a test
+    without cases here, such as one on data this machine lacks, is left out)."""
     out = []
     for test in assignment.tests:
         if test.hidden and not seed:
             continue
         fn = assignment.function(test.function)
         cases = tuple(test.cases(case_rng(test, seed)))
-        out.append(Prepared(test, cases, tuple(fn.reference(*c.args) for c in cases)))
+        if cases:
+            out.append(Prepared(test, cases, tuple(fn.reference(*c.args) for c in cases)))
     return tuple(out)
 
 
@@ -150,8 +155,10 @@ def run(assignment: Assignment, submission: Path, seed: str | None = None,
     tests = [TestResult(p.test, assignment.function(p.test.function)) for p in prepared]
     result = Result(assignment, submission, tests, hidden_run=seed is not None,
                     isolation=isolation())
+    names = frozenset(f.name for f in assignment.functions)
     try:
-        source = read_source(submission)
+        source = read_source(submission, assignment.allowed_imports, assignment.template, names)
+        result.notes = list(source.notes)
         result.problems = import_problems(source, assignment.allowed_imports, submission.name)
     except SubmissionError as exc:
         result.problems = [str(exc)]
@@ -168,13 +175,15 @@ def _skip_all(result: Result, note: str) -> None:
         t.note = note
 
 
-def _run_tests(assignment: Assignment, source: str, prepared: tuple[Prepared, ...],
+def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared, ...],
                result: Result, limits: Limits) -> None:
     names = [f.name for f in assignment.functions]
-    with Sandbox(source, names, limits, assignment.allowed_imports) as sandbox:
+    total = sum(len(p.cases) for p in prepared)
+    with Sandbox(source.text, names, limits, assignment.allowed_imports, total) as sandbox:
         started = sandbox.start()
         if started.status != "ok":
-            why = _error_text(started.error) if started.status == "error" else started.message
+            why = (_error_text(started.error, source.locate) if started.status == "error"
+                   else started.message)
             result.problems = [f"your file could not be loaded: {why}"]
             _skip_all(result, "not run: the file could not be loaded (see above)")
             return
@@ -188,13 +197,15 @@ def _run_tests(assignment: Assignment, source: str, prepared: tuple[Prepared, ..
                 # Frames that are not the child's own void the test: none of it can be trusted.
                 forged = next(o for o in outcomes if o.status == "garbage")
                 outcomes = [forged] * len(outcomes)
-            tr.cases = [_judge(fn, c, e, o, limits) for c, e, o in
+            catalogue = assignment.misconceptions_of(fn.name)
+            tr.cases = [_judge(fn, c, e, o, limits, source.locate, catalogue) for c, e, o in
                         zip(p.cases, p.expected, outcomes, strict=True)]
             tr.misconception = diagnose(assignment, fn, tr.cases)
         result.output = sandbox.output()
 
 
-def _judge(fn: Function, case: Case, expected: Any, out: Outcome, limits: Limits) -> CaseResult:
+def _judge(fn: Function, case: Case, expected: Any, out: Outcome, limits: Limits,
+           locate: Callable[[int], str], catalogue: tuple[Misconception, ...]) -> CaseResult:
     if out.status == "ok":
         assert out.value is not None
         v = fn.check.validate(fn.name, out.value, expected)
@@ -203,29 +214,43 @@ def _judge(fn: Function, case: Case, expected: Any, out: Outcome, limits: Limits
         why = fn.check.judge(v.array, expected, case.args)
         if why is None:
             return CaseResult(case, "pass", got=v.array, expected=expected)
-        got = fn.check.show_value(v.array)
-        return CaseResult(case, "wrong", f"{fn.name} returned {got}, expected "
-                          f"{fn.check.show_expected(expected)}: {why}", v.array, expected)
+        digits = fn.check.decimals(v.array, expected)
+        return CaseResult(case, "wrong", f"{fn.name} returned "
+                          f"{fn.check.show_value(v.array, digits)}, expected "
+                          f"{fn.check.show_expected(expected, digits)}: {why}", v.array, expected)
     if out.status == "error":
         if out.error.get("type") == "NotImplementedError":
             return CaseResult(case, "not_implemented", "not implemented yet", None, expected)
-        text = _error_text(out.error)
+        text = _error_text(out.error, locate)
         if out.error.get("type") == "MemoryError":
             text += f" (the memory limit is {limits.memory_mb} MB)"
-        return CaseResult(case, "error", f"{fn.name} raised {text}", None, expected)
-    if out.status == "skipped":
-        return CaseResult(case, "skipped", "not run: an earlier case stopped the interpreter",
-                          None, expected)
+        for m in catalogue:
+            hint = _explained(m, out.error, case)
+            if hint:
+                text += f": {hint}"
+                break
+        return CaseResult(case, "error", f"{fn.name} raised {text}", None, expected,
+                          error=out.error)
     return CaseResult(case, out.status, out.message, None, expected)
 
 
-def _error_text(error: dict[str, Any]) -> str:
+def _explained(m: Misconception, error: dict[str, Any], case: Case) -> str | None:
+    """What ``m`` says about the error a case raised, if it explains it."""
+    if m.explains is None:
+        return None
+    try:
+        return m.explains(error, *case.args)
+    except Exception:  # an explanation undefined on this input explains nothing
+        return None
+
+
+def _error_text(error: dict[str, Any], locate: Callable[[int], str]) -> str:
     text = error.get("type", "Exception")
     if error.get("message"):
         text += f": {error['message']}"
     where = error.get("where")
     if where:
-        text += f" (line {where['line']}: {where['code'].strip()})"
+        text += f" ({locate(where['line'])}: {where['code'].strip()})"
     return text
 
 
@@ -234,11 +259,12 @@ def diagnose(assignment: Assignment, fn: Function,
     """The first catalogued mistake that reproduces (or shows the symptom of) every failing
     case of a test, if any.
 
-    Only outputs of the right shape can be compared; a test with an exception, a timeout or
-    a wrong shape among its failures gets no diagnosis.
+    Only outputs of the right shape can be compared, and errors only by a mistake that
+    explains them; a test with a timeout or a wrong shape among its failures gets no
+    diagnosis.
     """
     failing = [c for c in cases if not c.passed]
-    if not failing or any(c.got is None for c in failing):
+    if not failing or any(c.got is None and c.error is None for c in failing):
         return None
     for m in assignment.misconceptions_of(fn.name):
         if all(_reproduces(m, fn, c) for c in failing):
@@ -247,6 +273,8 @@ def diagnose(assignment: Assignment, fn: Function,
 
 
 def _reproduces(m: Misconception, fn: Function, c: CaseResult) -> bool:
+    if c.got is None:
+        return c.error is not None and _explained(m, c.error, c.case) is not None
     try:
         with np.errstate(all="ignore"):
             if m.symptom is not None:
@@ -267,7 +295,7 @@ def describe_args(fn: Function, case: Case) -> str:
     parts = []
     for name, a in zip(fn.params, case.args, strict=True):
         text = show(a) if isinstance(a, np.ndarray) else f"{a:.4g}" if isinstance(a, float) else (
-            _short_text(a) if isinstance(a, str) else repr(a))
+            _short_text(str(a)) if isinstance(a, str) else repr(a))
         parts.append(f"{name} = {text}")
     return ", ".join(parts)
 

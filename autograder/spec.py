@@ -10,7 +10,9 @@ An assignment module (``autograder/assignments/a1.py``) builds one :class:`Assig
 * a catalogue of :class:`Misconception` s: each a known-wrong variant of one function,
   written as a function of the reference, which the diagnosis compares failing outputs to,
   or, where a mistake has no single wrong output (an iterative solver), a *symptom*: a
-  predicate on the failing output and the call's arguments.
+  predicate on the failing output and the call's arguments; a mistake that makes some
+  inputs raise (an inverse of a singular matrix) may also *explain* those errors;
+* optionally, per function, a :class:`Picture` of a failing case (skeletons, chains).
 
 Nothing here runs student code; the runner does, in a sandbox.
 """
@@ -36,17 +38,35 @@ class Case:
 
 
 @dataclass(frozen=True)
+class Picture:
+    """A failing case drawn as joint trees (the HTML report's figure): ``yours`` and
+    ``expected`` are joint positions ``(J, 3)`` with their ``parents`` (``expected_parents``
+    if they differ), ``start`` the pose the call started from (drawn faint), ``points``
+    labelled markers such as ``("target", (k, 3))``, and ``what`` names the picture."""
+
+    what: str
+    parents: np.ndarray
+    yours: np.ndarray
+    expected: np.ndarray
+    expected_parents: np.ndarray | None = None
+    start: np.ndarray | None = None
+    points: tuple[tuple[str, np.ndarray], ...] = ()
+
+
+@dataclass(frozen=True)
 class Function:
     """A function the student implements.
 
     ``params`` are the argument names, in order (for messages); ``reference`` computes the
-    expected output from the same arguments; ``check`` validates and compares outputs.
+    expected output from the same arguments; ``check`` validates and compares outputs;
+    ``picture(got, expected, args)`` draws a failing case, or returns None.
     """
 
     name: str
     params: tuple[str, ...]
     reference: Callable[..., Any]
     check: Check
+    picture: Callable[..., Picture | None] | None = None
 
 
 @dataclass(frozen=True)
@@ -72,7 +92,10 @@ class Misconception:
     ``wrong`` takes the same arguments as the function and returns what the mistaken
     implementation would; ``explanation`` is one sentence with the lecture's formula. When
     the mistaken output is not one definite answer, ``symptom(got, *args) -> bool`` instead
-    recognises it (the root moved, the bone lengths came out reversed, ...).
+    recognises it (the root moved, the bone lengths came out reversed, ...). A mistake that
+    makes some inputs raise may say so: ``explains(error, *args)`` returns, for the error a
+    case raised (type, message), a sentence on what happened, or None if this mistake does
+    not explain it.
     """
 
     key: str
@@ -81,6 +104,7 @@ class Misconception:
     explanation: str
     wrong: Callable[..., Any] | None = None
     symptom: Callable[..., bool] | None = None
+    explains: Callable[..., str | None] | None = None
 
     def __post_init__(self) -> None:
         if (self.wrong is None) == (self.symptom is None):

@@ -98,12 +98,48 @@ def test_fk_reference_matches_the_recursion_written_out(shared_bvh_dir):
     assert fk.check.compare((positions, orientations), (np.array(P), -np.array(Q))) is None
 
 
-def test_real_files_are_among_the_visible_cases(shared_bvh_dir):
-    labels = [c.label for c in visible_cases(A2, "parse_bvh_hierarchy")]
+def test_scored_cases_are_the_same_on_every_machine(monkeypatch):
+    """The scored tests use only what the package ships and generates; the real clips a
+    machine has add unscored tests and change no scored case."""
+    from autograder.assignments import a2
+
+    def scored_cases():
+        return {t.name: [c.label for c in t.cases(case_rng(t, "s"))]
+                for t in A2.tests if t.points}
+
+    here = scored_cases()
+    monkeypatch.setattr(a2, "local_clips", lambda: ())
+    a2.clip_motion.cache_clear()
+    assert scored_cases() == here
+    labels = here["parse_bvh_hierarchy: sample files"]
+    assert labels[0] == "the packaged wave clip" and len(labels) == 4
+    texts = dict(a2.sample_files())
+    assert "\r\n" in texts["sample file: CRLF line endings"]
+    assert "End Site" not in texts["sample file: leaves with CHANNELS but no End Site, tabs"]
+    rotation_first = texts["sample file: the root's rotation channels before its position, "
+                           "mixed orders"]
+    assert rotation_first.split("CHANNELS 6 ")[1].startswith(("Xrotation", "Yrotation",
+                                                              "Zrotation"))
+
+
+def test_the_real_clips_here_add_unscored_tests(shared_bvh_dir, tmp_path):
+    from autograder.report import csv_header, gradescope
+    from autograder.runner import prepare
+
+    result = check("a2", FIXTURES / "a2" / "reference.py", limits=LIMITS)
+    unscored = [t.test.name for t in result.tests if not t.test.points]
+    assert len(unscored) == 2 and "real clips on this machine (unscored) 12/12 cases" in " ".join(
+        str(result).split())  # shown to the student ...
+    assert not set(unscored) & set(csv_header(result))  # ... not in the class's results
+    assert not set(unscored) & {t["name"] for t in gradescope(result)["tests"]}
+
+    unscored = [p for p in prepare(A2, None) if not p.test.points]
+    assert [p.test.function for p in unscored] == ["parse_bvh_hierarchy", "forward_kinematics"]
+    labels = [c.label for c in unscored[0].cases]
     assert "the CMU walk (12_01)" in labels
     assert {f"edge case {p.name}" for p in (shared_bvh_dir / "edge_cases").glob("*.bvh")} <= set(
         labels)
-    walk = next(c for c in visible_cases(A2, "parse_bvh_hierarchy") if "CMU" in c.label)
+    walk = next(c for c in unscored[0].cases if "CMU" in c.label)
     names, parents, _ = A2.function("parse_bvh_hierarchy").reference(*walk.args)
     assert len(names) == 38 and "LeftHand_end" not in names[:1] and names.count("Head_end") == 1
 
@@ -143,11 +179,11 @@ def test_mutant_is_diagnosed_by_name(name, tmp_path):
     assert_diagnosed(result, fn, key)
 
 
-def test_pose_assuming_positions_first_gets_partial_bonus(tmp_path, shared_bvh_dir):
+def test_pose_assuming_positions_first_gets_partial_bonus(tmp_path):
     result = check("a2", fixture_submission("a2", "partial_pose_position_first.py", tmp_path),
                    seed=SEED, limits=LIMITS)
-    visible = next(t for t in result.tests if t.test.name.startswith("pose_from_frame (bonus): r"))
-    rotation_first = [c for c in visible.cases if "rotation_first" in c.case.label]
+    visible = next(t for t in result.tests if t.test.name.startswith("pose_from_frame (bonus): s"))
+    rotation_first = [c for c in visible.cases if "rotation channels before" in c.case.label]
     assert rotation_first and not any(c.passed for c in rotation_first)
     assert 0 < visible.score < 1 and result.score > result.max_score  # the core is all right
 
@@ -156,5 +192,16 @@ def test_reading_the_clips_from_disk_is_refused(tmp_path):
     result = check("a2", fixture_submission("a2", "adv_reads_the_files.py", tmp_path),
                    limits=LIMITS)
     parse = [t for t in result.tests if t.test.function == "parse_bvh_hierarchy"]
-    assert all(t.score == 0 for t in parse)
-    assert "does not let submissions" in str(result)
+    assert all(t.n_passed == 0 for t in parse)
+    assert "does not let submissions open '/work/shared/data/bvh/cmu_12_01_walk.bvh'" in " ".join(
+        str(result).split())
+
+
+@pytest.mark.parametrize(("name", "what"), [
+    ("mutant_fk_own_orientation.py", "your forward kinematics and the expected pose"),
+    ("mutant_parse_end_sites_dropped.py", "the rest pose of your hierarchy"),
+    ("mutant_local_reversed_product.py", "the pose your local rotations give"),
+    ("mutant_pose_degrees.py", "the pose your frame gives the file&#x27;s skeleton")])
+def test_html_report_pictures_the_skeletons(name, what, tmp_path):
+    page = check("a2", fixture_submission("a2", name, tmp_path), limits=LIMITS)._repr_html_()
+    assert "data:image/png;base64," in page and what in page

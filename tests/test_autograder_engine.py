@@ -95,7 +95,7 @@ def test_notebook_keeps_definitions_and_drops_display_code():
         {"cell_type": "code", "source": "from autograder import check\ncheck('a1')"},
         {"cell_type": "code", "source": "%%timeit\nthis is not python"},
     ]
-    src = source_from_notebook(json.dumps({"cells": cells}))
+    src = source_from_notebook(json.dumps({"cells": cells})).text
     assert "import numpy as np" in src and "EPS = 1e-9" in src and "def quat_mul" in src
     for gone in ("matplotlib", "pip", "check(", "plt.figure", "quat_mul(1, 2)", "timeit"):
         assert gone not in src

@@ -13,15 +13,17 @@ from autograder import Limits, check
 from autograder.assignments import load
 
 FIXTURES = Path(__file__).parent / "fixtures" / "a1"
-TEMPLATE = Path(__file__).parents[1] / "assignments" / "a1_rotations.py"
+REPO = Path(__file__).resolve().parents[1]
+TEMPLATE = REPO / "assignments" / "a1_rotations.py"
 LIMITS = Limits(cpu_seconds=5, memory_mb=600, load_timeout=5.0, case_timeout=0.5)
 SEED = "fixture-seed-7f3a"
 A1 = load("a1")
 
 
 def submission(name: str, tmp_path: Path) -> Path:
-    """A fixture as a file; ``# extends: reference.py`` fixtures are appended to it."""
-    src = (FIXTURES / name).read_text()
+    """A fixture as a file; ``# extends: reference.py`` fixtures are appended to it, and
+    ``@REPO@`` stands for this checkout (what a hostile submission would try to read)."""
+    src = (FIXTURES / name).read_text().replace("@REPO@", str(REPO))
     if src.startswith("# extends: reference.py"):
         src = (FIXTURES / "reference.py").read_text() + "\n\n" + src
     path = tmp_path / "a1_rotations.py"
@@ -85,7 +87,8 @@ def test_partial_work_gets_the_fraction_of_cases_passed(tmp_path):
 
 # name -> (visible score, phrases the report must contain)
 ADVERSARIAL = {
-    "adv_infinite_loop.py": (10, ["quat_mul did not finish within 0.5 s (an endless loop?)"]),
+    "adv_infinite_loop.py": (10, ["quat_mul did not finish within 0.5 s on this case (an "
+                                  "endless loop, or too slow?)"]),
     "adv_memory_bomb.py": (10, ["matrix_from_quat raised MemoryError", "limit is 600 MB"]),
     "adv_exits.py": (6, ["quat_from_matrix raised SystemExit", "quat_mul raised Escape",
                          "the interpreter exited (code 0) while slerp ran; does your code call"]),
@@ -108,6 +111,25 @@ ADVERSARIAL = {
                                  "allowed: the course library is the reference you are "
                                  "compared with"]),
     "adv_import_course_hidden.py": (0, ["importing 'course.rotations' is not allowed here"]),
+    # The sandbox's own defences: none of these reads the reference or memory.
+    "adv_patched_builtins.py": (10, [f"quat_mul raised PermissionError: the autograder does not "
+                                     f"let submissions open '{REPO}/course/rotations/"
+                                     "quaternion.py'"]),
+    "adv_patched_os_path.py": (10, [f"quat_mul raised PermissionError: the autograder does not "
+                                    f"let submissions open '{REPO}/course/rotations/"
+                                    "quaternion.py'"]),
+    "adv_ctypes_memory.py": (10, ["quat_mul raised ImportError: importing 'ctypes' is not "
+                                  "allowed here"]),
+    "adv_reads_reference.py": (0, [f"your file could not be loaded: PermissionError: the "
+                                   f"autograder does not let submissions open '{REPO}/course/"
+                                   "rotations/_checks.py'"]),
+    "adv_hook_tampering.py": (10, ["quat_mul raised RuntimeError: the autograder does not let "
+                                   "submissions open", "gc: the autograder does not let "
+                                   "submissions use gc.get_objects", "resolve.__code__: the "
+                                   "autograder does not let submissions replace code objects"]),
+    "adv_forged_recursion.py": (0, ["while your file loaded, something else wrote to the "
+                                    "grader's private result channel; nothing can be graded "
+                                    "(JSON nested too deeply)"]),
 }
 
 

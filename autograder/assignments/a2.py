@@ -5,9 +5,14 @@ Three functions and a bonus: ``parse_bvh_hierarchy(text)`` (the hierarchy sectio
 file, sent as a string), ``forward_kinematics`` (:math:`Q_i = Q_{p(i)} R_i`,
 :math:`p_i = p_{p(i)} + Q_{p(i)} l_i`), ``local_from_global`` (:math:`R_i = Q_{p(i)}^{-1} Q_i`)
 and, for bonus points, ``pose_from_frame`` (one MOTION line to the root position and local
-rotations: channel order, degrees). Cases come from real files (the CMU walk and the BVH edge
-cases in the shared data folder, else the packaged wave clip) and from generated hierarchies
-and poses. Reference: :mod:`course.bvh` and :mod:`course.fk`.
+rotations: channel order, degrees).
+
+The scored cases are the same on every machine: the wave clip shipped with the package, three
+sample files generated here in the style of the BVH edge cases real readers trip over (the
+root's rotation channels before its position, mixed rotation orders; leaves with CHANNELS but
+no End Site; CRLF line endings), and generated hierarchies and poses. The real clips a machine
+has locally (the CMU walk and the edge-case files of the shared data folder) add unscored
+tests, reported as such. Reference: :mod:`course.bvh` and :mod:`course.fk`.
 """
 
 from __future__ import annotations
@@ -23,9 +28,9 @@ from course.fk import local_from_global as ref_local
 from course.motion import is_end_site
 
 from ..checks import IndexCheck, PointsCheck, QuatCheck, StringsCheck, TupleCheck
-from ..spec import Assignment, Case, Function, Misconception, Test
+from ..spec import Assignment, Case, Function, Misconception, Picture, Test
 
-# --- hierarchies: real files and generated ones -----------------------------------------------
+# --- hierarchies: sample files, real ones, generated ones -------------------------------------
 
 EMPTY_MOTION = "MOTION\nFrames: 0\nFrame Time: 0.01\n"
 
@@ -44,28 +49,47 @@ def parse_reference(text: str):
 
 
 @cache
-def real_clips() -> tuple[tuple[str, str], ...]:
-    """``(label, file text)`` of the real clips on this machine: the CMU walk and the BVH edge
-    cases from the shared data folder, else the wave clip shipped with the package."""
+def sample_files() -> tuple[tuple[str, str], ...]:
+    """``(label, file text)`` of the files every machine has: the packaged wave clip and three
+    generated in the style of the BVH edge cases (see the module's docstring), with motion."""
+    from importlib.resources import files
+
+    wave = (files("course.data") / "samples" / "wave.bvh").read_text(encoding="utf-8")
+    rng = np.random.default_rng(105)  # fixed: these files are the same everywhere
+    styles = (
+        ("the root's rotation channels before its position, mixed orders",
+         {"n": 5, "rotation_first": True, "newline": "\n"}),
+        ("leaves with CHANNELS but no End Site, tabs", {"n": 7, "end_sites": False,
+                                                        "indent": "\t", "newline": "\n"}),
+        ("CRLF line endings", {"n": 20, "newline": "\r\n"}),
+    )
+    out = [("the packaged wave clip", wave)]
+    for label, style in styles:
+        text = random_hierarchy(rng, **style)
+        out.append((f"sample file: {label}", with_motion(rng, text, frames=12)))
+    return tuple(out)
+
+
+@cache
+def local_clips() -> tuple[tuple[str, str], ...]:
+    """``(label, file text)`` of the real clips this machine has locally (none offline): the
+    CMU walk and the edge-case files of the shared data folder. Only unscored tests use them,
+    so scores never depend on the machine."""
     from course import data
 
     found = []
     try:
         found.append(("the CMU walk (12_01)", data.path("cmu_12_01_walk", download=False)))
-    except Exception:  # offline and no mirror: the packaged clip stands in
+    except Exception:  # offline and no mirror
         pass
     edge = data.mirror_dir() / "edge_cases"
     found += [(f"edge case {p.name}", p) for p in sorted(edge.glob("*.bvh"))]
-    if not found:
-        from importlib.resources import files
-
-        found.append(("the packaged wave clip", files("course.data") / "samples" / "wave.bvh"))
     return tuple((label, p.read_bytes().decode("utf-8-sig")) for label, p in found)
 
 
 @cache
-def real_motion(label: str):
-    return parse_bvh(dict(real_clips())[label], source=label)
+def clip_motion(label: str):
+    return parse_bvh(dict(sample_files() + local_clips())[label], source=label)
 
 
 NAMES = ("Hips", "Spine", "Chest", "Neck", "Head", "Shoulder", "Arm", "ForeArm", "Hand",
@@ -86,10 +110,13 @@ def random_parents(rng: np.random.Generator, n: int) -> np.ndarray:
     return np.array(parents, dtype=np.int64)
 
 
-def random_hierarchy(rng: np.random.Generator, n: int) -> str:
+def random_hierarchy(rng: np.random.Generator, n: int, *, rotation_first: bool | None = None,
+                     end_sites: bool | None = None, indent: str | None = None,
+                     newline: str | None = None) -> str:
     """The hierarchy text of a random tree of ``n`` joints: random names, offsets with every
     number format, random rotation orders, the root's rotation channels sometimes before
-    its position channels, leaves with or without an End Site, tabs or spaces, LF or CRLF."""
+    its position channels, leaves with or without an End Site, tabs or spaces, LF or CRLF
+    (each keyword fixes one of these choices instead of drawing it)."""
     parents = random_parents(rng, n)
     children = [[c for c in range(n) if parents[c] == j] for j in range(n)]
     used: set[str] = set()
@@ -102,7 +129,7 @@ def random_hierarchy(rng: np.random.Generator, n: int) -> str:
                 used.add(s)
                 return s
 
-    indent = rng.choice(["\t", "  ", "    "])
+    indent = indent or rng.choice(["\t", "  ", "    "])
     out: list[str] = ["HIERARCHY"]
 
     def offset(depth: int) -> str:
@@ -117,27 +144,40 @@ def random_hierarchy(rng: np.random.Generator, n: int) -> str:
         rotation = [f"{a}rotation" for a in rng.choice(ORDERS)]
         if j == 0:
             position = ["Xposition", "Yposition", "Zposition"]
-            chans = rotation + position if rng.random() < 0.3 else position + rotation
+            first = rng.random() < 0.3 if rotation_first is None else rotation_first
+            chans = rotation + position if first else position + rotation
         else:
             chans = rotation
         out.append(f"{pad}{indent}CHANNELS {len(chans)} {' '.join(chans)}")
         for c in children[j]:
             joint(c, depth + 1)
-        if not children[j] and rng.random() < 0.7:
+        if not children[j] and (rng.random() < 0.7 if end_sites is None else end_sites):
             out.extend([f"{pad}{indent}End Site", f"{pad}{indent}{{", offset(depth + 2),
                         f"{pad}{indent}}}"])
         out.append(f"{pad}}}")
 
     joint(0, 0)
-    newline = "\r\n" if rng.random() < 0.3 else "\n"
+    newline = newline or ("\r\n" if rng.random() < 0.3 else "\n")
     return newline.join(out) + newline
+
+
+def with_motion(rng: np.random.Generator, text: str, frames: int) -> str:
+    """A hierarchy with a MOTION section of ``frames`` random frames, in its line endings."""
+    newline = "\r\n" if "\r\n" in text else "\n"
+    lines = [" ".join(f"{v:.4f}" for v in _random_frame(rng, text)) for _ in range(frames)]
+    return text + newline.join(["MOTION", f"Frames: {frames}", "Frame Time: 0.0333333", *lines,
+                                ""])
 
 
 # --- cases per function ------------------------------------------------------------------------
 
 
-def parse_real(rng):
-    return [Case(label, (hierarchy_of(text),)) for label, text in real_clips()]
+def parse_samples(rng):
+    return [Case(label, (hierarchy_of(text),)) for label, text in sample_files()]
+
+
+def parse_local(rng):
+    return [Case(label, (hierarchy_of(text),)) for label, text in local_clips()]
 
 
 def parse_generated(rng):
@@ -163,10 +203,10 @@ def _random_pose(rng: np.random.Generator, n: int):
     return parents, offsets, _quats(rng, n), rng.normal(0, 10, 3)
 
 
-def _real_frames(rng, per_clip: int) -> list[Case]:
+def _clip_frames(rng, per_clip: int, clips=sample_files) -> list[Case]:
     out = []
-    for label, _ in real_clips():
-        m = real_motion(label)
+    for label, _ in clips():
+        m = clip_motion(label)
         frames = np.unique(np.r_[0, rng.integers(0, m.n_frames, per_clip - 1)])
         sk = m.skeleton
         out += [Case(f"{label}, frame {f}", (np.asarray(sk.parents, dtype=np.int64),
@@ -175,8 +215,12 @@ def _real_frames(rng, per_clip: int) -> list[Case]:
     return out
 
 
-def fk_real(rng):
-    return _real_frames(rng, 3)
+def fk_samples(rng):
+    return _clip_frames(rng, 3)
+
+
+def fk_local(rng):
+    return _clip_frames(rng, 3, local_clips)
 
 
 def fk_random(rng):
@@ -202,7 +246,7 @@ def fk_random(rng):
 
 
 def fk_hidden(rng):
-    return [*_real_frames(rng, 2),
+    return [*_clip_frames(rng, 2),
             *(Case(f"hidden tree and pose #{i + 1}", _random_pose(rng, int(rng.integers(2, 30))))
               for i in range(10))]
 
@@ -214,7 +258,7 @@ def _orientation_case(label: str, parents, offsets, quats, root) -> Case:
 
 def local_random(rng):
     return [_orientation_case(c.label.replace("frame", "orientations of frame"), *c.args)
-            for c in _real_frames(rng, 2)[:4]] + [
+            for c in _clip_frames(rng, 2)[:4]] + [
         _orientation_case(f"orientations of a random pose #{i + 1}", *_random_pose(rng, n))
         for i, n in enumerate((4, 9, 16))]
 
@@ -252,7 +296,7 @@ def _random_frame(rng: np.random.Generator, text: str) -> np.ndarray:
 
 def pose_visible(rng):
     out = []
-    for label, text in real_clips():
+    for label, text in sample_files():
         m = parse_bvh(text, source=label)
         f = int(rng.integers(1, m.n_frames))
         line = _motion_line(text, f)
@@ -313,10 +357,12 @@ def _accumulated_offsets(text: str):
     return names, parents, rest
 
 
-def _euler_variant(text: str, frame: np.ndarray, *, fixed_order: str | None = None,
-                   degrees: bool = True):
-    """``pose_from_frame`` reading every joint's three angles in file order as ``fixed_order``
-    (channel order ignored), or leaving them in degrees."""
+def _euler_variant(text: str, frame: np.ndarray, *, always_xyz: bool = False,
+                   by_name: bool = True, degrees: bool = True):
+    """``pose_from_frame`` with one slip: every joint composed as R_X R_Y R_Z whatever its
+    CHANNELS order (``always_xyz``; each angle about the axis its channel names, or with
+    ``by_name=False`` the three values in file order taken as x, y, z), or the angles left
+    in degrees (``degrees=False``)."""
     motion = parse_bvh(hierarchy_of(text) + EMPTY_MOTION)
     root, quats = pose_reference(text, frame)
     k = 0
@@ -327,8 +373,11 @@ def _euler_variant(text: str, frame: np.ndarray, *, fixed_order: str | None = No
                 if c.endswith("rotation")]
         if len(axes) != 3:
             continue
-        order = fixed_order or "".join(a for a, _ in axes)
-        quats[j] = rot.quat_from_euler(np.array([v for _, v in axes]), order, degrees=degrees)
+        if always_xyz and by_name:
+            axes = sorted(axes)
+        order = "XYZ" if always_xyz else "".join(a for a, _ in axes)
+        quats[j] = rot.quat_from_euler(np.array([v for _, v in axes]), order,
+                                       degrees=degrees)
     return root, quats
 
 
@@ -373,16 +422,80 @@ MISCONCEPTIONS = (
                      for i, p in enumerate(parents) if p >= 0)])),
     Misconception(
         "channel_order_ignored", "pose_from_frame", "channel order ignored (always XYZ)",
-        "A joint's rotation is the product of its channels in file order: \"Zrotation "
-        "Yrotation Xrotation\" is R = R_Z(z) R_Y(y) R_X(x), intrinsic \"ZYX\"; you read every "
-        "joint as X, Y, Z.",
-        wrong=lambda text, frame: _euler_variant(text, frame, fixed_order="XYZ")),
+        "A joint's rotation is the product of its channels in the order the CHANNELS line lists "
+        "them: \"Zrotation Yrotation Xrotation\" is R = R_Z(z) R_Y(y) R_X(x), intrinsic "
+        "\"ZYX\"; you turned each angle about its own axis but always multiplied R_X R_Y R_Z.",
+        wrong=lambda text, frame: _euler_variant(text, frame, always_xyz=True)),
+    Misconception(
+        "channel_axes_positional", "pose_from_frame", "the angles read as x, y, z in file order",
+        "Each rotation channel names its axis: \"Zrotation Yrotation Xrotation\" gives the "
+        "first value to z, R = R_Z(z) R_Y(y) R_X(x); you read the three values as x, y, z, "
+        "whatever the CHANNELS line says.",
+        wrong=lambda text, frame: _euler_variant(text, frame, always_xyz=True, by_name=False)),
     Misconception(
         "degrees", "pose_from_frame", "angles left in degrees",
         "BVH stores rotation channels in degrees: convert them (θ·π/180) before building "
         "R = R_Z(z) R_Y(y) R_X(x).",
         wrong=lambda text, frame: _euler_variant(text, frame, degrees=False)),
 )
+
+# --- pictures of a failing case ----------------------------------------------------------------
+
+
+def _tree(parents) -> np.ndarray | None:
+    """``parents`` as integers if they describe a tree listed parents first, else None."""
+    p = np.asarray(parents)
+    if p.ndim != 1 or not len(p) or p[0] != -1 or np.any(p[1:] < 0) or np.any(
+            p[1:] >= np.arange(1, len(p))) or np.any(p != np.round(p)):
+        return None
+    return p.astype(np.int64)
+
+
+def _posed(parents, offsets, quats, root) -> np.ndarray | None:
+    """Joint positions p_i = p_parent + Q_parent l_i, or None if the tree is not one."""
+    tree = _tree(parents)
+    q = np.asarray(quats, dtype=float)
+    if tree is None or q.shape != (len(tree), 4) or np.any(np.linalg.norm(q, axis=1) < 1e-9):
+        return None
+    return np.array(ref_fk(tree, np.asarray(offsets, float), rot.quat_normalize(q), root)[0])
+
+
+def parse_picture(got, expected, args) -> Picture | None:
+    """The rest pose of your hierarchy (offsets added up along the parents) and the expected."""
+    mine = _posed(got[1], got[2], np.tile([1.0, 0, 0, 0], (len(got[1]), 1)), np.zeros(3))
+    if mine is None:
+        return None
+    rest = _posed(expected[1], expected[2], np.tile([1.0, 0, 0, 0], (len(expected[1]), 1)),
+                  np.zeros(3))
+    return Picture("the rest pose of your hierarchy (offsets added along the parents) and the "
+                   "expected one", np.asarray(got[1], np.int64), mine, rest,
+                   expected_parents=np.asarray(expected[1], np.int64))
+
+
+def fk_picture(got, expected, args) -> Picture:
+    return Picture("your forward kinematics and the expected pose", args[0], got[0], expected[0])
+
+
+def local_picture(got, expected, args) -> Picture | None:
+    """The pose your local rotations give a skeleton of unit bones along y."""
+    parents = args[0]
+    bones = np.tile([0.0, 1.0, 0.0], (len(parents), 1))
+    mine = _posed(parents, bones, got, np.zeros(3))
+    if mine is None:
+        return None
+    return Picture("the pose your local rotations give (every bone 1 long, along y at rest) and "
+                   "the expected one", parents, mine,
+                   _posed(parents, bones, expected, np.zeros(3)))
+
+
+def pose_picture(got, expected, args) -> Picture | None:
+    _, parents, offsets = parse_reference(args[0])
+    mine = _posed(parents, offsets, got[1], got[0])
+    if mine is None:
+        return None
+    return Picture("the pose your frame gives the file's skeleton, and the expected one",
+                   parents, mine, _posed(parents, offsets, expected[1], expected[0]))
+
 
 # --- the assignment ----------------------------------------------------------------------------
 
@@ -392,16 +505,17 @@ ORIENTATIONS = QuatCheck(atol=1e-6, shape=None)
 _FUNCTIONS = (
     Function("parse_bvh_hierarchy", ("text",), parse_reference,
              TupleCheck((StringsCheck("name"), IndexCheck(noun="parent"),
-                         PointsCheck(row="offset")), ("names", "parents", "offsets"))),
+                         PointsCheck(row="offset")), ("names", "parents", "offsets")),
+             parse_picture),
     Function("forward_kinematics", ("parents", "offsets", "local_quats", "root_position"),
              lambda parents, offsets, quats, root: tuple(
                  np.array(a) for a in ref_fk(parents, offsets, rot.quat_normalize(quats), root)),
-             TupleCheck((POSITIONS, ORIENTATIONS), ("positions", "orientations"))),
+             TupleCheck((POSITIONS, ORIENTATIONS), ("positions", "orientations")), fk_picture),
     Function("local_from_global", ("parents", "orientations"),
-             lambda parents, Q: np.array(ref_local(parents, Q)), ORIENTATIONS),
+             lambda parents, Q: np.array(ref_local(parents, Q)), ORIENTATIONS, local_picture),
     Function("pose_from_frame", ("text", "frame"), pose_reference,
              TupleCheck((PointsCheck(atol=1e-6, row="coordinate", shape=(3,)), ORIENTATIONS),
-                        ("root_position", "local_quats"))),
+                        ("root_position", "local_quats")), pose_picture),
 )
 
 ASSIGNMENT = Assignment(
@@ -410,12 +524,12 @@ ASSIGNMENT = Assignment(
     template="a2_forward_kinematics.py",
     functions=_FUNCTIONS,
     tests=(
-        Test("parse_bvh_hierarchy: real files", "parse_bvh_hierarchy", 1.0, parse_real),
+        Test("parse_bvh_hierarchy: sample files", "parse_bvh_hierarchy", 1.0, parse_samples),
         Test("parse_bvh_hierarchy: generated hierarchies", "parse_bvh_hierarchy", 1.0,
              parse_generated),
         Test("parse_bvh_hierarchy: hidden hierarchies", "parse_bvh_hierarchy", 2.0,
              parse_hidden, hidden=True),
-        Test("forward_kinematics: real frames", "forward_kinematics", 1.0, fk_real),
+        Test("forward_kinematics: sample motions", "forward_kinematics", 1.0, fk_samples),
         Test("forward_kinematics: random poses and edge cases", "forward_kinematics", 1.0,
              fk_random),
         Test("forward_kinematics: hidden poses", "forward_kinematics", 2.0, fk_hidden,
@@ -424,10 +538,14 @@ ASSIGNMENT = Assignment(
         Test("local_from_global: edge cases", "local_from_global", 1.0, local_edges),
         Test("local_from_global: hidden poses", "local_from_global", 1.0, local_hidden,
              hidden=True),
-        Test("pose_from_frame (bonus): real and generated frames", "pose_from_frame", 1.0,
+        Test("pose_from_frame (bonus): sample and generated frames", "pose_from_frame", 1.0,
              pose_visible, bonus=True),
         Test("pose_from_frame (bonus): hidden frames", "pose_from_frame", 1.0, pose_hidden,
              hidden=True, bonus=True),
+        Test("parse_bvh_hierarchy: real clips on this machine (unscored)",
+             "parse_bvh_hierarchy", 0.0, parse_local),
+        Test("forward_kinematics: real clips on this machine (unscored)", "forward_kinematics",
+             0.0, fk_local),
     ),
     misconceptions=MISCONCEPTIONS,
 )

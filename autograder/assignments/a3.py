@@ -23,7 +23,7 @@ from course import rotations as rot
 from course.ik import ccd_positions, fabrik_positions, two_link
 
 from ..checks import Check, PointsCheck, TupleCheck, show
-from ..spec import Assignment, Case, Function, Misconception, Test
+from ..spec import Assignment, Case, Function, Misconception, Picture, Test
 
 ROOT_TOL = 1e-6  # times the chain's length: how far the root and the bone lengths may drift
 STRETCH_TOL = 1e-3  # times the chain's length: how close to straight an out-of-reach chain ends
@@ -76,7 +76,7 @@ class ChainCheck(Check):
         problems = chain_problems(got, args[0], args[1], args[2])
         return problems[0] if problems else None
 
-    def show_expected(self, expected: Any) -> str:
+    def show_expected(self, expected: Any, digits: int = 3) -> str:
         return "the root fixed, the bone lengths kept and the end effector on the target"
 
 
@@ -96,7 +96,7 @@ class CurveCheck(Check):
                         f"{path:.3g} from the curve)")
         return None
 
-    def show_expected(self, expected: Any) -> str:
+    def show_expected(self, expected: Any, digits: int = 3) -> str:
         return "one pose per curve point, each with the end effector on that point"
 
 
@@ -111,8 +111,8 @@ class TwoLinkCheck(TupleCheck):
         problems = two_link_problems(got, *args)
         return problems[0] if problems else None
 
-    def show_expected(self, expected: Any) -> str:
-        return f"(mid, end) = {super().show_expected(expected)}"
+    def show_expected(self, expected: Any, digits: int = 3) -> str:
+        return f"(mid, end) = {super().show_expected(expected, digits)}"
 
 
 def two_link_problems(got, root, mid, end, target, pole) -> list[str]:
@@ -218,6 +218,9 @@ def ik_edges(rng, method, max_iter: int) -> list[Case]:
              (one, one[0] + 1.3 * bones(one)[0] * _direction(rng), 1e-4, max_iter)),
         Case("a straight chain, target off to the side",
              (straight, np.array([1.5, 0.5, 2.0]), 1e-4, max_iter)),
+        Case("a straight chain, the target straight behind it (e - r_i and t - r_i point "
+             "opposite ways: a half turn, not none)",
+             (straight, np.array([0.0, 0.0, -2.0]), 1e-4, max_iter)),
         Case("a long chain (12 joints)", (long, reachable_target(rng, long), 1e-4, max_iter)),
         Case("tol = 0 is never met: stop after max_iter = 60", (tight, t, 0.0, 60)),
     ]
@@ -442,6 +445,85 @@ def _effector_pivot(got, positions, target, *_):
                                                                               target)
 
 
+def ccd_turning(positions, target, tol, max_iter, lever: int = 0, half_turns: bool = True):
+    """CCD as :func:`course.ik.ccd_positions` sweeps it, tip to root, except that the turn of
+    joint i is measured from joint ``i + lever``: the shortest arc from e - r_{i+lever} to
+    t - r_{i+lever}, applied about r_i (``lever = 1``: the wrong joint; a joint whose lever
+    would be the effector itself has no turn). ``half_turns=False`` skips a joint whose two
+    vectors are parallel or opposite (|u × v| = 0), as a CCD built on the cross product does.
+    """
+    P = np.array(positions, dtype=float)
+    n = len(P)
+    sweeps = 0
+    while np.linalg.norm(P[-1] - target) >= tol and sweeps < max_iter:
+        for i in range(n - 2, -1, -1):
+            j = i + lever
+            if j >= n - 1:
+                continue
+            u, v = P[-1] - P[j], target - P[j]
+            if _norm(u) < 1e-12 or _norm(v) < 1e-12 or (
+                    not half_turns and _norm(np.cross(u, v)) < 1e-12 * _norm(u) * _norm(v)):
+                continue
+            q = rot.quat_between(u, v)
+            P[i + 1:] = P[i] + rot.quat_rotate(q, P[i + 1:] - P[i])
+        sweeps += 1
+    return P
+
+
+def _same_chain(a: np.ndarray, b: np.ndarray) -> bool:
+    return a.shape == b.shape and bool(np.all(np.abs(a - b) <= 1e-6 * max(1.0, bones(b).sum())))
+
+
+def _wrong_joint(got, positions, target, tol, max_iter):
+    return any(_same_chain(got, ccd_turning(positions, target, tol, max_iter, 1, half))
+               for half in (True, False))
+
+
+def _antiparallel_skipped(got, positions, target, *_):
+    """Unchanged on a chain where every e - r_i points straight away from t - r_i."""
+    u, v = positions[-1] - positions[:-1], target - positions[:-1]
+    straight_away = np.all(np.linalg.norm(np.cross(u, v), axis=1) <= 1e-9 * _norm(u) * _norm(v))
+    return _unchanged(got, positions, target) and bool(
+        straight_away and np.all(np.sum(u * v, axis=1) < 0))
+
+
+def _axis_in_wrong_frame(got, positions, axes):
+    """Columns perpendicular to their lever arms e - r_i (the lever is right) but not to the
+    given world axes a_i (the axis is not)."""
+    lever = positions[-1] - positions[:-1]
+    cols = np.asarray(got).T
+    scale = max(1.0, float(np.max(_norm(lever))))
+    along_lever = np.abs(np.sum(cols * lever, axis=1)) <= 1e-6 * scale * scale
+    along_axis = np.abs(np.sum(cols * axes, axis=1)) <= 1e-6 * scale
+    return bool(np.all(along_lever) and not np.all(along_axis))
+
+
+def _singular(J: np.ndarray) -> bool:
+    return np.linalg.cond(J @ J.T) > 1e10
+
+
+def _undamped(got, J, error, damping):
+    """J⁺e where J Jᵀ can be inverted; where it cannot, a step beyond the damped bound
+    |Δθ| <= |e| / 2λ (or not finite), as (J Jᵀ)⁻¹ of a singular matrix gives."""
+    got = np.asarray(got, dtype=float)
+    if np.allclose(got, dls_reference(J, error, damping), rtol=1e-6, atol=1e-9):
+        return False  # right (with λ = 0 the damped step is J⁺e)
+    if np.allclose(got, np.linalg.pinv(J) @ error, rtol=1e-6, atol=1e-9):
+        return True
+    if not _singular(J) or damping <= 0:
+        return False
+    return not np.all(np.isfinite(got)) or _norm(got) > _norm(error) / (2 * damping) * (1 + 1e-6)
+
+
+def _undamped_error(error: dict, J, e, damping) -> str | None:
+    if error.get("type") != "LinAlgError" or not _singular(J):
+        return None
+    (m, n), rank = J.shape, np.linalg.matrix_rank(J)
+    why = f"J has only {n} columns" if n < m else "a singular pose (the chain stretched)"
+    return (f"here J Jᵀ ({m}×{m}) has rank {rank}: {why}, so (J Jᵀ)⁻¹ does not exist; "
+            f"J Jᵀ + λ²I (λ = {damping:g}) is invertible for any λ > 0")
+
+
 def _pole_ignored(got, root, mid, end, target, pole):
     problems = two_link_problems(got, root, mid, end, target, pole)
     return bool(problems) and all("plane" in p or "away from the pole" in p for p in problems)
@@ -459,6 +541,12 @@ MISCONCEPTIONS = (
         "to a circle about the root-target axis u; the pole picks the point: "
         "mid = root + l₁(cos α u + sin α n), n the pole direction made perpendicular to u.",
         symptom=_pole_ignored),
+    Misconception(
+        "antiparallel_skipped", "ccd", "a joint skipped when e - r_i and t - r_i are opposite",
+        "When e - r_i and t - r_i point in opposite directions their cross product is 0 but the "
+        "turn is a half turn, not none: R is the rotation by π about any axis perpendicular to "
+        "e - r_i (say (e - r_i) × x̂, or × ŷ when that is 0), then p_k ← r_i + R(p_k - r_i).",
+        symptom=_antiparallel_skipped),
     Misconception("unchanged", "ccd", *UNCHANGED, symptom=_unchanged),
     Misconception(
         "effector_pivot", "ccd", "rotating about the end effector",
@@ -466,6 +554,12 @@ MISCONCEPTIONS = (
         "arc from e - r_i to t - r_i, p_k ← r_i + R(p_k - r_i) for k > i; turning about e "
         "leaves the effector where it is and stretches bone i.",
         symptom=_effector_pivot),
+    Misconception(
+        "wrong_joint", "ccd", "the turn measured at the wrong joint",
+        "Joint i's turn is the shortest arc R from e - r_i to t - r_i, both measured from r_i, "
+        "the joint that turns: p_k ← r_i + R(p_k - r_i) for k > i; your turns match arcs "
+        "measured from the next joint, e - r_{i+1} to t - r_{i+1}.",
+        symptom=_wrong_joint),
     Misconception("unchanged", "fabrik", *UNCHANGED, symptom=_unchanged),
     Misconception(
         "no_reanchor", "fabrik", "the root not re-anchored (no backward pass)",
@@ -490,10 +584,17 @@ MISCONCEPTIONS = (
         "swings the whole chain beyond it, not just the next joint (r_{i+1} - r_i).",
         wrong=lambda positions, axes: np.cross(axes, np.diff(positions, axis=0)).T),
     Misconception(
+        "local_axes", "jacobian", "hinge axes in the wrong frame (local instead of world)",
+        "J_i = a_i × (e - r_i) takes the world axis a_i = Q_i â_i, after the turns of the joints "
+        "above i, which is what you are given; your columns are perpendicular to the lever arms "
+        "e - r_i but not to a_i, as when a joint's local axis â_i (or another frame's) is used.",
+        symptom=_axis_in_wrong_frame),
+    Misconception(
         "no_damping", "dls_step", "no damping (the plain pseudo-inverse)",
         "Damped least squares adds λ² I before inverting, Δθ = Jᵀ(JJᵀ + λ²I)⁻¹ e, which keeps "
-        "the step bounded (|Δθ| ≤ |e|/2λ) near singular poses; without it this is J⁺e.",
-        wrong=lambda J, error, damping: np.linalg.pinv(J) @ error),
+        "the step bounded (|Δθ| ≤ |e|/2λ) near singular poses; Jᵀ(JJᵀ)⁻¹e, or J⁺e, has no λ "
+        "and explodes (or cannot be computed) where JJᵀ is singular.",
+        symptom=_undamped, explains=_undamped_error),
     Misconception(
         "lambda_not_squared", "dls_step", "λ where λ² belongs",
         "damping is λ, and the term added is λ²I: Δθ = Jᵀ(JJᵀ + λ²I)⁻¹ e (it minimises "
@@ -501,19 +602,53 @@ MISCONCEPTIONS = (
         wrong=lambda J, error, damping: dls_reference(J, error, np.sqrt(damping))),
 )
 
+# --- pictures of a failing case ----------------------------------------------------------------
+
+
+def _chain_parents(n: int) -> np.ndarray:
+    return np.arange(-1, n - 1)
+
+
+def chain_picture(got, expected, args) -> Picture:
+    """A CCD or FABRIK answer: your chain and the reference's, from the start pose, with the
+    target (the reference's pose is one right answer of many)."""
+    P, target = args[0], args[1]
+    return Picture("your chain and the reference solver's (one right answer of many)",
+                   _chain_parents(len(P)), np.asarray(got), np.asarray(expected), start=P,
+                   points=(("target", np.atleast_2d(target)),))
+
+
+def two_link_picture(got, expected, args) -> Picture:
+    root, mid, end, target, pole = args
+    return Picture("your limb and the expected one, with the target and the pole",
+                   _chain_parents(3), np.array([root, *got]), np.array([root, *expected]),
+                   start=np.array([root, mid, end]),
+                   points=(("target", np.atleast_2d(target)), ("pole", np.atleast_2d(pole))))
+
+
+def curve_picture(got, expected, args) -> Picture:
+    P, curve = args[0], args[1]
+    return Picture("your last pose and path of the end effector, and the reference's",
+                   _chain_parents(len(P)), np.asarray(got)[-1], np.asarray(expected)[-1],
+                   start=P, points=(("curve", curve), ("your path", np.asarray(got)[:, -1])))
+
+
 # --- the assignment ----------------------------------------------------------------------------
 
 _FUNCTIONS = (
     Function("two_link_ik", ("root", "mid", "end", "target", "pole"),
-             lambda *args: tuple(np.array(x) for x in two_link(*args)[:2]), TwoLinkCheck()),
-    Function("ccd", ("positions", "target", "tol", "max_iter"), _ccd, ChainCheck()),
-    Function("fabrik", ("positions", "target", "tol", "max_iter"), _fabrik, ChainCheck()),
+             lambda *args: tuple(np.array(x) for x in two_link(*args)[:2]), TwoLinkCheck(),
+             two_link_picture),
+    Function("ccd", ("positions", "target", "tol", "max_iter"), _ccd, ChainCheck(),
+             chain_picture),
+    Function("fabrik", ("positions", "target", "tol", "max_iter"), _fabrik, ChainCheck(),
+             chain_picture),
     Function("jacobian", ("positions", "axes"), jacobian_reference,
              Check(None, atol=1e-6)),
     Function("dls_step", ("J", "error", "damping"), dls_reference,
              Check(None, atol=1e-9, rtol=1e-6)),
     Function("trace_curve", ("positions", "curve", "tol", "max_iter"), trace_reference,
-             CurveCheck()),
+             CurveCheck(), curve_picture),
 )
 
 

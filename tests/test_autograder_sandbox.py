@@ -1,0 +1,239 @@
+"""The sandbox itself: the audit hook's own robustness, the private file system of the
+namespaces, the fallbacks, per-case limits and what the reports say when a limit is hit."""
+
+from __future__ import annotations
+
+import dis
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_autograder_fixtures import REPO, submission
+
+from autograder import Limits, check
+from autograder.checks import Check, QuatCheck, StringsCheck, TupleCheck
+from autograder.child import make_hook
+from autograder.cli import main
+from autograder.protocol import ProtocolError, decode_value, read_frame
+from autograder.runner import describe_args
+from autograder.sandbox import INSIDE, Sandbox, isolation
+from autograder.spec import Case, Function
+
+LIMITS = Limits(cpu_seconds=5, memory_mb=600, load_timeout=5.0, case_timeout=0.5)
+NAMESPACES = pytest.mark.skipif(isolation() != "namespaces",
+                                reason="no user and mount namespaces on this machine")
+
+
+def one_line(result) -> str:
+    return " ".join(str(result).split())
+
+
+# --- the audit hook ----------------------------------------------------------------------------
+
+
+@pytest.fixture
+def hook(tmp_path):
+    work, stdlib = tmp_path / "work", tmp_path / "stdlib"
+    (stdlib / "site-packages" / "scipy").mkdir(parents=True)
+    (stdlib / "json").mkdir()
+    work.mkdir()
+    (work / "mine.py").write_text("")
+    os.symlink(REPO / "course" / "rotations" / "quaternion.py", work / "link.py")
+    return make_hook(str(work), (str(tmp_path / "numpy"), str(stdlib)),
+                     (str(stdlib / "site-packages"),), frozenset({"numpy", "json"})), work
+
+
+def refused(hook, event: str, *args) -> str:
+    with pytest.raises((PermissionError, ImportError)) as info:
+        hook(event, args)
+    return str(info.value)
+
+
+def test_the_hook_reads_no_global_and_has_no_cell_to_overwrite(hook):
+    """Rebinding a builtin, os.path or the child's globals cannot change what the hook does,
+    and its frame (which a refusal's traceback shows) holds nothing mutable."""
+    h, _ = hook
+    helpers = [d for d in h.__defaults__ if hasattr(d, "__code__")]
+    assert {f.__name__ for f in helpers} == {"resolve", "within", "may_read"}
+    for f in [h, *helpers]:
+        ops = {i.opname for i in dis.get_instructions(f)}
+        assert not ops & {"LOAD_GLOBAL", "LOAD_NAME", "LOAD_DEREF", "LOAD_CLOSURE"}, f.__name__
+        assert f.__closure__ is None
+        assert all(isinstance(d, (str, int, tuple, frozenset, type)) or callable(d)
+                   for d in f.__defaults__), f.__name__
+
+
+def test_the_hook_checks_the_file_that_will_really_be_opened(hook, tmp_path):
+    h, work = hook
+    h("open", (str(work / "mine.py"), "r", 0))
+    h("open", (str(work / "new.txt"), "w", os.O_WRONLY | os.O_CREAT))
+    h("open", (str(tmp_path / "stdlib" / "json" / "x.py"), "r", 0))
+    h("os.listdir", (str(tmp_path / "stdlib" / "json"),))
+    h("import", ("json.decoder",))
+    assert "open" in refused(h, "open", str(work / "link.py"), "r", 0)  # a link to the reference
+    assert "open" in refused(h, "open", str(work / ".." / "stdlib" / "json" / "x.py"), "w", 1)
+    assert "open" in refused(h, "open", str(tmp_path / "stdlib" / "site-packages" / "scipy"
+                                            / "x.py"), "r", 0)
+    h("open", (str(work), "w", os.O_TMPFILE | os.O_RDWR))  # tempfile.TemporaryFile does this
+    # a descriptor of a readable folder would let dir_fd= paths reach beyond it
+    assert "directory" in refused(h, "open", str(tmp_path / "stdlib"), None, os.O_RDONLY)
+
+    class Shifty:
+        def __fspath__(self):
+            return str(work / "mine.py")
+
+    class Lying(str):
+        def startswith(self, *a):
+            return True
+
+    for path in (Shifty(), Lying(str(REPO / "README.md"))):
+        assert "plain str or bytes" in refused(h, "open", path, "r", 0)
+    assert "not allowed" in refused(h, "import", Lying("numpy"))
+    assert "ctypes.string_at" in refused(h, "ctypes.string_at", 1, 8)
+    assert "os.chdir" in refused(h, "os.chdir", str(work))
+    assert "os.symlink" in refused(h, "os.symlink", "a", "b", -1)
+    assert "replace code objects" in refused(h, "object.__setattr__", len, "__code__", None)
+    assert "outside" in refused(h, "os.listdir", "/")
+
+
+def test_ordinary_code_is_not_refused(tmp_path):
+    """The standard library and numpy's corners work in the sandbox as they do anywhere."""
+    result = check("a1", submission("legit_stdlib_heavy.py", tmp_path), limits=LIMITS)
+    assert result.score == 12 and not result.problems, str(result)
+
+
+# --- the private file system -------------------------------------------------------------------
+
+
+@NAMESPACES
+def test_the_repository_and_everything_else_are_absent_from_the_sandbox(tmp_path):
+    """Beyond the hook: in the namespaces the checkout, numpy's real folder, /proc and the
+    installed packages do not exist, whatever the submission tries."""
+    paths = [str(REPO), str(REPO / "course"), str(Path(np.__file__).parent), "/proc/self",
+             str(tmp_path), f"{os.path.dirname(os.__file__)}/site-packages/scipy"]
+    src = ("import os\n\n\ndef quat_mul(a, b):\n"
+           f"    raise RuntimeError(str([os.path.exists(p) for p in {paths!r}]) + ' ' + "
+           "os.getcwd())\n")
+    (tmp_path / "a1_rotations.py").write_text(src)
+    result = check("a1", tmp_path / "a1_rotations.py", limits=LIMITS)
+    assert result.isolation == "namespaces"
+    assert f"RuntimeError: {[False] * len(paths)} {INSIDE}/work" in one_line(result)
+
+
+@NAMESPACES
+@pytest.mark.skipif(not Path("/usr/bin/sh").exists(), reason="no /usr/bin/sh to look around")
+def test_only_the_working_directory_is_writable_in_the_namespaces(tmp_path):
+    """The same mounts with a shell in the child's place, no audit hook at all."""
+    with Sandbox("", [], LIMITS, frozenset(), level="namespaces") as box:
+        config = {"req_fd": 0, "res_fd": 1, "functions": [], "allowed": [], "cpu_seconds": 5,
+                  "memory_mb": 100}
+        cmd = box._command("namespaces", config)
+        cut = len(cmd) - cmd[::-1].index("--")  # the child's command follows the last "--"
+        probe = ("for p in /usr/x /sandbox/runtime/x /x /sandbox/work/x; do "
+                 "touch $p 2>/dev/null && echo $p; done; ls /")
+        out = subprocess.run([*cmd[:cut], "/usr/bin/sh", "-c", probe], capture_output=True,
+                             text=True, cwd=box.work, timeout=30).stdout.split()
+    assert out[0] == "/sandbox/work/x"  # the one place a submission may write
+    assert set(out[1:]) <= {"dev", "etc", "lib", "lib32", "lib64", "libx32", "root", "sandbox",
+                            "usr", "opt", "home", "nix"}
+
+
+@pytest.mark.parametrize("level", ["unshare", "plain"])
+def test_weaker_isolation_still_holds_and_says_so(level, tmp_path, monkeypatch, capsys):
+    import autograder.cli
+    import autograder.sandbox
+
+    monkeypatch.setattr(autograder.sandbox, "isolation", lambda: level)
+    monkeypatch.setattr(autograder.runner, "isolation", lambda: level)
+    if level == "unshare" and autograder.sandbox.LEVELS.index(isolation()) > 1:
+        pytest.skip("no user namespaces on this machine")
+    result = check("a1", submission("adv_reads_reference.py", tmp_path), limits=LIMITS)
+    assert result.score == 0 and "does not let submissions open" in one_line(result)
+    note = "No private file system here" if level == "unshare" else "No Linux namespaces here"
+    assert note in str(result)
+    monkeypatch.setattr(autograder.cli, "isolation", lambda: level)
+    main(["grade", "--assignment", "a1", str(REPO / "tests/fixtures/a1/reference.py"), "--out",
+          str(tmp_path / "out"), "--seed", "s"])
+    assert f"warning: isolation is weaker on this machine ({level})" in capsys.readouterr().err
+
+
+# --- limits per case ---------------------------------------------------------------------------
+
+
+def test_a_slow_but_correct_function_gets_full_marks(tmp_path):
+    """0.15 s of CPU per call, 20 calls: within every case's limit; the CPU backstop is
+    sized for all cases together."""
+    limits = Limits(memory_mb=600, load_timeout=5.0, case_timeout=0.5)
+    result = check("a1", submission("slow_correct_euler.py", tmp_path), limits=limits)
+    assert result.score == 12, str(result)
+
+
+@pytest.mark.parametrize("level", ["default", "plain"])
+def test_running_out_of_cpu_time_says_so(level, tmp_path, monkeypatch):
+    import autograder.sandbox
+
+    if level == "plain":
+        monkeypatch.setattr(autograder.sandbox, "isolation", lambda: "plain")
+    limits = Limits(cpu_seconds=1, memory_mb=600, load_timeout=5.0, case_timeout=5.0)
+    result = check("a1", submission("slow_correct_euler.py", tmp_path), limits=limits)
+    euler = [t for t in result.tests if t.test.function == "matrix_from_euler"]
+    assert all(t.status == "partial" for t in euler)  # a fresh interpreter ran the rest
+    assert result.score == pytest.approx(10 + sum(t.score for t in euler))
+    text = one_line(result)
+    assert ("matrix_from_euler ran out of CPU time: the interpreter used its 1 s of CPU time "
+            "for all cases") in text
+    assert "exited (code" not in text and not result.output  # no "Killed", no "sigprocmask"
+
+
+def test_a_forged_frame_nested_too_deeply_is_refused(tmp_path):
+    body = b"[" * 200000 + b"]" * 200000
+    (tmp_path / "frame").write_bytes(len(body).to_bytes(4, "big") + body)
+    fd = os.open(tmp_path / "frame", os.O_RDONLY)
+    with pytest.raises(ProtocolError, match="nested too deeply"):
+        read_frame(fd)
+    os.close(fd)
+    deep = {"kind": "none"}
+    for _ in range(6):
+        deep = {"kind": "seq", "items": [deep]}
+    with pytest.raises(ProtocolError, match="nested too deeply"):
+        decode_value(deep)
+
+
+# --- messages ----------------------------------------------------------------------------------
+
+
+def test_messages_print_plain_strings_and_enough_digits():
+    fn = Function("matrix_from_euler", ("angles", "order"), lambda *a: None, None)
+    assert describe_args(fn, Case("x", (np.zeros(3), np.str_("ZYX")))) == (
+        "angles = [0, 0, 0], order = 'ZYX'")
+    got, want = np.array([0.21429, 0.14286, 0.07143]), np.array([0.21414, 0.14286, 0.07143])
+    assert Check(None).decimals(got, want) == 5 and Check(None).decimals(got, got) == 3
+    assert Check(None).decimals(-want, want) == 3  # a sign flip shows at 3 decimals
+    pair = TupleCheck((Check(None), Check(None)), ("a", "b"))
+    assert pair.decimals((got, np.ones(2)), (want, np.ones(2))) == 5
+    q = np.array([0.5, 0.5, 0.5, 0.5])
+    assert QuatCheck().decimals(-q - 1e-6, q) == 7  # q ~ -q: the 1e-6 is what differs
+    assert StringsCheck().decimals(("a",), ("b",)) == 3
+
+
+def test_a_dls_step_slightly_off_shows_the_difference(tmp_path):
+    src = ((REPO / "tests/fixtures/a3/reference.py").read_text()
+           + "\n\ndef dls_step(J, error, damping):\n"
+             "    m = J.shape[0]\n"
+             "    return J.T @ np.linalg.solve(J @ J.T + (damping**2 + 1e-4) * np.eye(m), error)\n")
+    (tmp_path / "a3.py").write_text(src)
+    result = check("a3", tmp_path / "a3.py", limits=Limits(memory_mb=600, case_timeout=1.0))
+    first = next(t for t in result.tests if t.test.function == "dls_step").first_failure
+    returned, expected = first.reason.split("returned ")[1].split(", expected ")
+    assert returned != expected.split(":")[0]  # the two printouts differ where the values do
+
+
+def test_no_sandbox_folder_is_left_behind(tmp_path, monkeypatch):
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    check("a1", submission("adv_hook_tampering.py", tmp_path), limits=LIMITS)
+    assert not list((tmp_path / "tmp").iterdir())
