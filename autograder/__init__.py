@@ -25,7 +25,7 @@ __all__ = ["Limits", "Result", "check"]
 
 
 def check(assignment: str, submission: str | Path | None = None, *, seed: str | None = None,
-          limits: Limits = DEFAULT_LIMITS) -> Result:
+          limits: Limits = DEFAULT_LIMITS, isolation: str | None = None) -> Result:
     """Check a submission of ``assignment`` (``"a1"``, ...) and return its :class:`Result`.
 
     In a notebook the result shows as an HTML report (with a picture of the first failing
@@ -41,6 +41,11 @@ def check(assignment: str, submission: str | Path | None = None, *, seed: str | 
     seed : str, optional
         The instructor's secret seed, which adds the hidden tests (default
         ``$AUTOGRADER_SEED``; students have none and run the visible tests only).
+    limits : Limits, optional
+        Time and memory limits of the sandbox.
+    isolation : str, optional
+        The sandbox's isolation level (see :mod:`autograder.sandbox`); default: the strongest
+        this machine allows. ``"portable"`` is what Windows gets, and runs anywhere.
     """
     from .assignments import load
     from .runner import default_submission, run, seed_from_env
@@ -49,4 +54,4 @@ def check(assignment: str, submission: str | Path | None = None, *, seed: str | 
     path = Path(submission) if submission is not None else default_submission(spec)
     if not path.exists():
         raise ValueError(f"submission: {path} does not exist")
-    return run(spec, path, seed_from_env(seed), limits)
+    return run(spec, path, seed_from_env(seed), limits, isolation)

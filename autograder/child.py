@@ -6,25 +6,32 @@ minimal environment (no path to the course, no seed). On Linux it usually runs i
 fresh namespaces whose file system holds only the interpreter, numpy and the working
 directory (see :mod:`autograder.sandbox`). Before the submission is loaded it
 
-1. lowers its own CPU-time, address-space and file-size limits (soft = hard, so the
-   submission cannot raise them again);
-2. keeps ``ctypes`` from loading at all (numpy would import it, and ctypes reads any
+1. moves the grader's pipes off its standard input and output (requests come on stdin,
+   frames go to stdout): descriptor 1 then points at the log like descriptor 2, and 0 at
+   the null device, so a ``print`` never reaches the grader and ``input()`` reads nothing;
+2. on POSIX levels, lowers its own CPU-time, address-space and file-size limits (soft =
+   hard, so the submission cannot raise them again); at the ``"portable"`` level (Windows)
+   it sets none and imports no POSIX-only module;
+3. keeps ``ctypes`` from loading at all (numpy would import it, and ctypes reads any
    address in memory without raising an audit event), imports numpy from the one directory
    the grader names, then drops site-packages from ``sys.path`` (so ``course``, ``scipy``
    and the grader are not even findable);
-3. installs an audit hook (which Python cannot remove) refusing imports outside numpy and
-   the harmless standard library, process creation and signals, sockets, ctypes, changing
-   the working directory, symbolic links, directories and files outside the allowed ones
-   (``site-packages`` excluded), and replacing code objects. Everything the hook uses is
-   bound when it is installed, as immutable default arguments and C functions (no closure
-   cells, no globals), so a submission that rebinds builtins, ``os.path`` or this module's
-   globals, or reads the hook's frame from a refusal's traceback, changes nothing.
+4. installs an audit hook (which Python cannot remove) refusing imports outside numpy and
+   the harmless standard library, process creation and signals, sockets, ctypes, the
+   Windows API modules, changing the working directory, symbolic links, directories and
+   files outside the allowed ones (``site-packages`` excluded), and replacing code objects.
+   Everything the hook uses is bound when it is installed, as immutable default arguments
+   and C functions (no closure cells, no globals), so a submission that rebinds builtins,
+   ``os.path`` or this module's globals, or reads the hook's frame from a refusal's
+   traceback, changes nothing. Paths are compared without case where file systems ignore
+   it (Windows, macOS); on Windows the kernel's own resolution (``nt._getfinalpathname``:
+   links, junctions, short ``~1`` names) decides where a path leads.
 
 Modules numpy itself loaded (``inspect``, ``importlib``, ``pickle``) stay reachable through
 ``sys.modules``; none of them reaches outside the process. The child then answers requests
-on a dedicated pipe (never stdout), one frame per case, so the grader knows exactly which
-case crashed or hung; each frame carries the request's random nonce, so frames forged by
-the submission are recognised. Everything is judged in the grader.
+one frame per case, so the grader knows exactly which case crashed or hung; each frame
+carries the request's random nonce, so frames forged by the submission are recognised.
+Everything is judged in the grader.
 """
 
 from __future__ import annotations
@@ -45,7 +52,7 @@ BLOCKED_STDLIB = frozenset({
     "subprocess", "_posixsubprocess", "multiprocessing", "_multiprocessing", "concurrent",
     "socket", "_socket", "ssl", "_ssl", "http", "ftplib", "smtplib", "asyncio",
     "ctypes", "_ctypes", "pty", "resource", "inspect", "importlib", "pickle", "_pickle",
-    "marshal",
+    "marshal", "_winapi", "_overlapped", "winreg", "msvcrt", "winsound",
 })
 # Audit events refused outright: new processes, signals, network, native code, gc walks,
 # tracing, limits, the working directory and symbolic links (both would let a path checked
@@ -58,8 +65,11 @@ BLOCKED_EVENTS = frozenset({
     "gc.get_objects", "gc.get_referrers", "gc.get_referents", "sys.setprofile",
     "sys.settrace", "sys._current_frames", "sys._current_exceptions",
     "os.chroot", "os.setuid", "resource.setrlimit", "resource.prlimit", "os.chdir",
-    "os.symlink",
+    "os.symlink", "os.startfile",
 })
+# Prefixes of audit events refused outright: the network, native code, and the Windows API
+# (processes, junctions, pipes, the registry).
+BLOCKED_PREFIXES = ("socket.", "ctypes.", "_winapi.", "winreg.")
 # Audit events with path arguments that must stay inside the working directory.
 PATH_EVENTS = frozenset({
     "os.remove", "os.rmdir", "os.mkdir", "os.chmod", "os.chown", "os.truncate", "os.utime",
@@ -69,14 +79,17 @@ PATH_EVENTS = frozenset({
 # Audit events with a path argument that must be readable: listing a directory.
 LIST_EVENTS = frozenset({"os.listdir", "os.scandir", "os.listxattr", "os.getxattr"})
 CODE_ATTRIBUTES = frozenset({"__code__", "__defaults__", "__kwdefaults__", "__globals__"})
+# Where file names ignore case by default (NTFS, APFS), so paths are compared without it.
+CASELESS_PLATFORMS = ("win32", "darwin")
 
 
 def main() -> None:
+    req, res = _take_pipes()
     config = json.loads(sys.argv[1])
     sys.argv[:] = ["child.py"]
     os.chdir(config["cwd"])  # under the sandbox's chroot the process starts in "/"
-    req, res = config["req_fd"], config["res_fd"]
-    _limit(config)
+    if config["limits"] is not None:
+        _limit(config["limits"])
     sys.modules["ctypes"] = None  # type: ignore[assignment]  (numpy copes without it)
     sys.path.append(config["numpy_path"])
     import numpy  # noqa: F401  (loaded before the hook; the submission reuses it)
@@ -85,11 +98,20 @@ def main() -> None:
     protocol = _load_module("_autograder_protocol", config["protocol"])
     sys.path[:] = [p for p in sys.path if p != config["numpy_path"] and "site-packages" not in p]
     stdlib = os.path.realpath(os.path.dirname(os.__file__))
+    extensions = []  # Windows keeps the standard library's compiled modules beside it
+    nt_paths = None
+    if os.name == "nt":
+        import nt
+
+        nt_paths = (nt._getfullpathname, nt._getfinalpathname)
+        dlls = os.path.join(sys.base_exec_prefix, "DLLs")
+        extensions = [os.path.realpath(dlls)] if os.path.isdir(dlls) else []
     sys.addaudithook(make_hook(
         writable=os.path.realpath(config["cwd"]),
-        readable=(*(os.path.realpath(p) for p in config["numpy_dirs"]), stdlib),
+        readable=(*(os.path.realpath(p) for p in config["numpy_dirs"]), *extensions, stdlib),
         hidden=tuple(os.path.join(stdlib, d) for d in ("site-packages", "dist-packages")),
         allowed=_allowed_modules(config["allowed"]),
+        nt_paths=nt_paths,
     ))
     try:
         module = _load_module("submission", config["submission"])
@@ -106,12 +128,21 @@ def main() -> None:
         protocol.write_frame(res, {"done": True, "nonce": nonce})
 
 
-def _limit(config: dict) -> None:
-    try:
-        import resource
-    except ImportError:  # not a POSIX system: the grader's wall clock still holds
-        return
-    cpu, mem = int(config["cpu_seconds"]), int(config["memory_mb"]) << 20
+def _take_pipes() -> tuple[int, int]:
+    """The grader's request and result pipes, moved off descriptors 0 and 1 (which then read
+    the null device and write to the log, as descriptor 2 does)."""
+    req, res = os.dup(0), os.dup(1)
+    null = os.open(os.devnull, os.O_RDONLY | getattr(os, "O_BINARY", 0))
+    os.dup2(null, 0)
+    os.close(null)
+    os.dup2(2, 1)
+    return req, res
+
+
+def _limit(limits: dict) -> None:
+    import resource  # only asked for on POSIX systems
+
+    cpu, mem = int(limits["cpu_seconds"]), int(limits["memory_mb"]) << 20
     for limit, value in ((resource.RLIMIT_CPU, cpu), (resource.RLIMIT_AS, mem),
                          (resource.RLIMIT_FSIZE, 16 << 20), (resource.RLIMIT_CORE, 0)):
         try:
@@ -136,10 +167,17 @@ def _allowed_modules(extra: list[str]) -> frozenset[str]:
 
 
 def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
-              allowed: frozenset[str]) -> Callable[[str, tuple], None]:
+              allowed: frozenset[str], nt_paths: tuple[Callable, Callable] | None = None,
+              caseless: bool = sys.platform in CASELESS_PLATFORMS
+              ) -> Callable[[str, tuple], None]:
     """The audit hook. ``writable``: the working directory; ``readable``: the directories a
-    submission may read (numpy's first, then the standard library, whose ``hidden``
-    site-packages stay out of reach).
+    submission may read (numpy's and other extra folders first, then the standard library,
+    whose ``hidden`` site-packages stay out of reach).
+
+    ``nt_paths``: on Windows, ``nt._getfullpathname`` and ``nt._getfinalpathname``, which
+    resolve a path as Windows will open it; elsewhere (None) paths are resolved here one
+    component at a time, as the POSIX kernel does. ``caseless``: compare paths without case
+    (always with ``nt_paths``), where the file system ignores it.
 
     The hook and its helpers have no closure cells and read no global or builtin name:
     everything they use is a default argument, bound now, and either immutable (str, tuple,
@@ -148,15 +186,80 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
     ``__defaults__`` is itself refused.
     """
 
+    sep = "/" if nt_paths is None else "\\"
+    fold = str.lower if caseless or nt_paths is not None else str.__str__
+
+    if nt_paths is None:
+        def locate(path, startswith=str.startswith, getcwd=os.getcwd, lstat=os.lstat,
+                   readlink=os.readlink, item=tuple.__getitem__, oserror=OSError,
+                   refuse=PermissionError):
+            """``path`` made absolute with ``.``, ``..`` and symbolic links resolved as the
+            POSIX kernel would."""
+            if not startswith(path, "/"):
+                path = getcwd() + "/" + path
+            todo = path.split("/")
+            todo.reverse()
+            done = []
+            hops = 0
+            while todo:
+                part = todo.pop()
+                if part == "" or part == ".":
+                    continue
+                if part == "..":
+                    if done:
+                        done.pop()
+                    continue
+                here = "/".join(["", *done, part])
+                try:
+                    mode = item(lstat(here), 0)  # st_mode, read past any patched attribute
+                except oserror:  # not there (yet): nothing to follow
+                    mode = 0
+                if mode & 0o170000 == 0o120000:  # a symbolic link
+                    hops += 1
+                    if hops > 40:
+                        raise refuse(f"too many symbolic links in {path!r}")
+                    target = readlink(here)
+                    if startswith(target, "/"):
+                        done = []
+                    more = target.split("/")
+                    more.reverse()
+                    todo.extend(more)
+                    continue
+                done.append(part)
+            return "/" + "/".join(done)
+    else:
+        def locate(path, full=nt_paths[0], final=nt_paths[1], startswith=str.startswith,
+                   rpartition=str.rpartition, oserror=OSError, valueerror=ValueError,
+                   refuse=PermissionError):
+            """``path`` as Windows opens it: made absolute, ``/`` as ``\\``, ``.``, ``..`` and
+            trailing dots and spaces dropped (``full``), then links, junctions and short
+            ``~1`` names followed to the real, long path (``final``) of the file or, for a
+            file not there yet, of its folder."""
+            try:
+                path = full(path)
+            except (oserror, valueerror):  # a NUL character, say
+                raise refuse(f"the autograder does not let submissions name {path!r}") from None
+            if ":" in path[2:]:  # alternate data streams, \\?\ and \\.\ device paths
+                raise refuse(f"the autograder does not let submissions name {path!r}")
+            try:
+                real = final(path)
+            except oserror:  # not there (yet): its folder decides, and open() needs one
+                head, _, tail = rpartition(path, "\\")
+                try:
+                    real = final(head) + "\\" + tail
+                except oserror:
+                    return path
+            if startswith(real, "\\\\?\\UNC\\"):
+                return "\\\\" + real[8:]
+            return real[4:] if startswith(real, "\\\\?\\") else real
+
     encoding = sys.getfilesystemencoding()
 
-    def resolve(path, type_=type, str_=str, bytes_=bytes, int_=int, decode=bytes.decode,
-                encoding=encoding, startswith=str.startswith,
-                getcwd=os.getcwd, lstat=os.lstat, readlink=os.readlink,
-                item=tuple.__getitem__, oserror=OSError, refuse=PermissionError):
-        """``path`` made absolute with ``.``, ``..`` and symbolic links resolved as the
-        kernel would; None for an open descriptor. Only exact str and bytes are accepted:
-        a str subclass or an os.PathLike could show this check one path and open() another.
+    def resolve(path, locate=locate, type_=type, str_=str, bytes_=bytes, int_=int,
+                decode=bytes.decode, encoding=encoding, refuse=PermissionError):
+        """``path`` made absolute and real as the kernel will open it (:func:`locate`); None
+        for an open descriptor. Only exact str and bytes are accepted: a str subclass or an
+        os.PathLike could show this check one path and open() another.
         """
         kind = type_(path)
         if kind is int_:
@@ -166,48 +269,23 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
         elif kind is not str_:
             raise refuse("the autograder only lets submissions name files by a plain str or "
                          "bytes path")
-        if not startswith(path, "/"):
-            path = getcwd() + "/" + path
-        todo = path.split("/")
-        todo.reverse()
-        done = []
-        hops = 0
-        while todo:
-            part = todo.pop()
-            if part == "" or part == ".":
-                continue
-            if part == "..":
-                if done:
-                    done.pop()
-                continue
-            here = "/".join(["", *done, part])
-            try:
-                mode = item(lstat(here), 0)  # st_mode, read past any patched attribute
-            except oserror:  # not there (yet): nothing to follow
-                mode = 0
-            if mode & 0o170000 == 0o120000:  # a symbolic link
-                hops += 1
-                if hops > 40:
-                    raise refuse(f"too many symbolic links in {path!r}")
-                target = readlink(here)
-                if startswith(target, "/"):
-                    done = []
-                more = target.split("/")
-                more.reverse()
-                todo.extend(more)
-                continue
-            done.append(part)
-        return "/" + "/".join(done)
+        return locate(path)
 
-    def within(p, roots, startswith=str.startswith):
+    def within(p, roots, startswith=str.startswith, fold=fold, sep=sep):
+        p = fold(p)
         for r in roots:
-            if p == r or startswith(p, r + "/"):
+            if p == r or startswith(p, r + sep):
                 return True
         return False
 
-    def may_read(p, writable=writable, numpy_dirs=readable[:-1], stdlib=readable[-1:],
-                 hidden=hidden, within=within):
-        if p == "/dev/null" or within(p, (writable,)) or within(p, numpy_dirs):
+    writable, readable, hidden = (fold(writable), tuple(fold(p) for p in readable),
+                                  tuple(fold(p) for p in hidden))
+    devnull = fold(resolve(os.devnull))
+
+    def may_read(p, devnull=devnull, writable=writable,
+                 extra_dirs=readable[:-1], stdlib=readable[-1:], hidden=hidden, within=within,
+                 fold=fold):
+        if fold(p) == devnull or within(p, (writable,)) or within(p, extra_dirs):
             return True
         return within(p, stdlib) and not within(p, hidden)
 
@@ -217,7 +295,7 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
              write_flags=os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_TRUNC,
              type_=type, str_=str, int_=int, bool_=bool, stat=os.stat, item=tuple.__getitem__,
              startswith=str.startswith, oserror=OSError, refuse=PermissionError,
-             refuse_import=ImportError):
+             refuse_import=ImportError, prefixes=BLOCKED_PREFIXES, devnull=devnull, fold=fold):
         if event == "import":
             name = args[0]
             if type_(name) is not str_ or name.partition(".")[0] not in allowed:
@@ -234,7 +312,7 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
                 for c in "wax+":
                     if c in mode:
                         writing = True
-            if not (within(p, writable) or p == "/dev/null") if writing else not may_read(p):
+            if not (within(p, writable) or fold(p) == devnull) if writing else not may_read(p):
                 raise refuse(f"the autograder does not let submissions open {path!r}")
             try:
                 is_dir = item(stat(p), 0) & 0o170000 == 0o040000
@@ -245,7 +323,7 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
                 # hook sees relative to the working directory) reach outside it.
                 raise refuse(f"the autograder does not let submissions open the directory "
                              f"{path!r}")
-        elif event in blocked or startswith(event, "socket.") or startswith(event, "ctypes."):
+        elif event in blocked or startswith(event, prefixes):
             raise refuse(f"the autograder does not let submissions use {event}")
         elif event in path_events or event in list_events:
             for a in args:

@@ -10,7 +10,7 @@ from pathlib import Path
 from .assignments import KEYS, load
 from .grading import collect, grade
 from .runner import default_submission, run, seed_from_env
-from .sandbox import ISOLATION_NOTES, isolation
+from .sandbox import ISOLATION_NOTES, LEVELS, level_for
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -22,6 +22,8 @@ def main(argv: list[str] | None = None) -> int:
     c.add_argument("--submission", type=Path, help="a .py or .ipynb file (default: the "
                    "template, e.g. assignments/a1_rotations.py)")
     c.add_argument("--seed", help="instructors: the secret seed, to add the hidden tests")
+    c.add_argument("--isolation", choices=LEVELS, help="the sandbox's isolation (default: the "
+                   "strongest this machine allows)")
 
     g = sub.add_parser("grade", help="grade many submissions (instructors)")
     g.add_argument("--assignment", required=True, choices=KEYS)
@@ -29,15 +31,21 @@ def main(argv: list[str] | None = None) -> int:
     g.add_argument("--out", required=True, type=Path, help="folder for the results")
     g.add_argument("--jobs", type=int, default=1, help="submissions graded at once")
     g.add_argument("--seed", help="secret seed of the hidden tests (or $AUTOGRADER_SEED)")
+    g.add_argument("--isolation", choices=LEVELS, help="the sandbox's isolation (default: the "
+                   "strongest this machine allows)")
 
     args = parser.parse_args(argv)
     spec = load(args.assignment)
     seed = seed_from_env(args.seed)
+    try:
+        level = level_for(args.isolation)
+    except ValueError as exc:
+        parser.error(str(exc))
     if args.command == "check":
         path = args.submission or default_submission(spec)
         if not path.exists():
             parser.error(f"submission: {path} does not exist")
-        result = run(spec, path, seed)
+        result = run(spec, path, seed, level=level)
         print(result)
         return 0 if result.score >= result.max_score else 1
     try:
@@ -49,12 +57,12 @@ def main(argv: list[str] | None = None) -> int:
     if not seed:
         print("warning: no --seed or $AUTOGRADER_SEED: grading the visible tests only",
               file=sys.stderr)
-    if isolation() != "namespaces":
-        print(f"warning: isolation is weaker on this machine ({isolation()}): "
-              f"{ISOLATION_NOTES[isolation()].strip('()')} Grade on Linux with user namespaces "
+    if level != "namespaces":
+        print(f"warning: isolation is weaker on this machine ({level}): "
+              f"{ISOLATION_NOTES[level].strip('()')} Grade on Linux with user namespaces "
               "for a private file system per submission.", file=sys.stderr)
     start = time.monotonic()
-    rows = grade(spec, submissions, args.out, jobs=args.jobs, seed=seed)
+    rows = grade(spec, submissions, args.out, jobs=args.jobs, seed=seed, level=level)
     mean = sum(r["score"] for r in rows) / len(rows)
     print(f"graded {len(rows)} submissions in {time.monotonic() - start:.1f} s; mean score "
           f"{mean:.2f} / {rows[0]['max_score']:g}; results in {args.out}/grades.csv",

@@ -16,7 +16,7 @@ from typing import TextIO
 
 from .report import csv_header, csv_row, gradescope, write_csv
 from .runner import Result, TestResult, prepare, run
-from .sandbox import DEFAULT_LIMITS, Limits, isolation
+from .sandbox import DEFAULT_LIMITS, Limits, level_for
 from .spec import Assignment
 
 SUFFIXES = (".py", ".ipynb")
@@ -59,16 +59,17 @@ def _one_submission(folder: Path, template: str) -> Path | None:
 
 def grade(assignment: Assignment, submissions: list[tuple[str, Path]], out: Path, *,
           jobs: int = 1, seed: str | None = None, limits: Limits = DEFAULT_LIMITS,
-          progress: TextIO | None = sys.stderr) -> list[dict]:
-    """Grade every submission; write ``out/<name>/results.json`` and ``out/grades.csv``."""
+          progress: TextIO | None = sys.stderr, level: str | None = None) -> list[dict]:
+    """Grade every submission; write ``out/<name>/results.json`` and ``out/grades.csv``.
+    ``level``: the sandbox's isolation (default: the strongest here)."""
     out.mkdir(parents=True, exist_ok=True)
     prepare(assignment, seed)  # once, before the threads start
-    isolation()  # probed once, too
+    level = level_for(level)  # probed once, too
     bar = Progress(len(submissions), progress)
     rows: dict[str, dict] = {}
     header = None
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-        futures = {pool.submit(_grade_one, assignment, path, seed, limits): (name, path)
+        futures = {pool.submit(_grade_one, assignment, path, seed, limits, level): (name, path)
                    for name, path in submissions}
         for future in as_completed(futures):
             name, path = futures[future]
@@ -86,14 +87,15 @@ def grade(assignment: Assignment, submissions: list[tuple[str, Path]], out: Path
     return ordered
 
 
-def _grade_one(assignment: Assignment, path: Path, seed: str | None, limits: Limits) -> Result:
+def _grade_one(assignment: Assignment, path: Path, seed: str | None, limits: Limits,
+               level: str) -> Result:
     try:
-        return run(assignment, path, seed, limits)
+        return run(assignment, path, seed, limits, level)
     except Exception as exc:  # a bug of ours must not stop the class's grading
         tests = [TestResult(p.test, assignment.function(p.test.function),
                             note="not run: the grader failed on this submission")
                  for p in prepare(assignment, seed)]
-        return Result(assignment, path, tests, seed is not None,
+        return Result(assignment, path, tests, seed is not None, isolation=level,
                       problems=[f"the grader failed ({type(exc).__name__}: {exc}); "
                                 "please report this"])
 

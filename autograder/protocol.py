@@ -1,8 +1,12 @@
 """The wire between the grader and the sandboxed child: length-prefixed JSON, never pickles.
 
-A frame is a 4-byte big-endian length and that many bytes of UTF-8 JSON. The child writes
-frames only to a dedicated pipe (not stdout), so whatever a submission prints is never
-mistaken for a result. Values cross as plain data:
+A frame is a 4-byte big-endian length and that many bytes of UTF-8 JSON. The child's standard
+input and output pipes carry the frames, and the child moves them off descriptors 0 and 1
+before anything else runs (a submission's ``print`` goes to the log, ``input()`` reads
+nothing), so whatever a submission prints is never mistaken for a result. Reading blocks;
+the grader waits for a frame with a deadline on a thread of its own
+(:class:`autograder.sandbox.Replies`), which works on every platform. Values cross as plain
+data:
 
 * grader to child, arguments: numbers, strings, and arrays as ``{"nd": [...], "shape": [...]}``;
 * child to grader, a returned value described by :func:`encode_value` (arrays, strings such
@@ -18,9 +22,7 @@ from __future__ import annotations
 import json
 import math
 import os
-import select
 import struct
-import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -46,15 +48,15 @@ def write_frame(fd: int, obj: Any) -> None:
         view = view[os.write(fd, view):]
 
 
-def read_frame(fd: int, deadline: float | None = None) -> Any | None:
-    """Read one frame; None at end of file; ``TimeoutError`` past ``deadline`` (monotonic)."""
-    head = _read_exactly(fd, 4, deadline)
+def read_frame(fd: int) -> Any | None:
+    """Read one frame (blocking); None at end of file."""
+    head = _read_exactly(fd, 4)
     if head is None:
         return None
     (n,) = struct.unpack(">I", head)
     if n > MAX_FRAME:
         raise ProtocolError(f"frame of {n} bytes is too large")
-    body = _read_exactly(fd, n, deadline)
+    body = _read_exactly(fd, n)
     if body is None:
         raise ProtocolError("stream ended inside a frame")
     try:
@@ -65,13 +67,9 @@ def read_frame(fd: int, deadline: float | None = None) -> Any | None:
         raise ProtocolError("JSON nested too deeply") from None
 
 
-def _read_exactly(fd: int, n: int, deadline: float | None) -> bytes | None:
+def _read_exactly(fd: int, n: int) -> bytes | None:
     buf = bytearray()
     while len(buf) < n:
-        if deadline is not None:
-            left = deadline - time.monotonic()
-            if left <= 0 or not select.select([fd], [], [], left)[0]:
-                raise TimeoutError
         chunk = os.read(fd, n - len(buf))
         if not chunk:
             if buf:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from .checks import show
-from .sandbox import DEFAULT_LIMITS, Limits, Outcome, Sandbox, isolation
+from .sandbox import DEFAULT_LIMITS, Limits, Outcome, Sandbox, level_for
 from .spec import Assignment, Case, Function, Misconception, Test, case_rng
 from .submission import Source, SubmissionError, import_problems, read_source
 
@@ -147,14 +147,15 @@ def default_submission(assignment: Assignment) -> Path:
 
 
 def run(assignment: Assignment, submission: Path, seed: str | None = None,
-        limits: Limits = DEFAULT_LIMITS) -> Result:
-    """Grade ``submission`` (a ``.py`` or ``.ipynb``) against ``assignment``."""
+        limits: Limits = DEFAULT_LIMITS, level: str | None = None) -> Result:
+    """Grade ``submission`` (a ``.py`` or ``.ipynb``) against ``assignment``, in a sandbox
+    of isolation ``level`` (default: the strongest here; see :mod:`autograder.sandbox`)."""
     start = time.monotonic()
     seed = seed or None
     prepared = prepare(assignment, seed)
     tests = [TestResult(p.test, assignment.function(p.test.function)) for p in prepared]
     result = Result(assignment, submission, tests, hidden_run=seed is not None,
-                    isolation=isolation())
+                    isolation=level_for(level))
     names = frozenset(f.name for f in assignment.functions)
     try:
         source = read_source(submission, assignment.allowed_imports, assignment.template, names)
@@ -179,7 +180,8 @@ def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared,
                result: Result, limits: Limits) -> None:
     names = [f.name for f in assignment.functions]
     total = sum(len(p.cases) for p in prepared)
-    with Sandbox(source.text, names, limits, assignment.allowed_imports, total) as sandbox:
+    with Sandbox(source.text, names, limits, assignment.allowed_imports, total,
+                 level=result.isolation) as sandbox:
         started = sandbox.start()
         if started.status != "ok":
             why = (_error_text(started.error, source.locate) if started.status == "error"
@@ -198,13 +200,13 @@ def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared,
                 forged = next(o for o in outcomes if o.status == "garbage")
                 outcomes = [forged] * len(outcomes)
             catalogue = assignment.misconceptions_of(fn.name)
-            tr.cases = [_judge(fn, c, e, o, limits, source.locate, catalogue) for c, e, o in
-                        zip(p.cases, p.expected, outcomes, strict=True)]
+            tr.cases = [_judge(fn, c, e, o, sandbox.memory_mb, source.locate, catalogue)
+                        for c, e, o in zip(p.cases, p.expected, outcomes, strict=True)]
             tr.misconception = diagnose(assignment, fn, tr.cases)
         result.output = sandbox.output()
 
 
-def _judge(fn: Function, case: Case, expected: Any, out: Outcome, limits: Limits,
+def _judge(fn: Function, case: Case, expected: Any, out: Outcome, memory_mb: int | None,
            locate: Callable[[int], str], catalogue: tuple[Misconception, ...]) -> CaseResult:
     if out.status == "ok":
         assert out.value is not None
@@ -222,8 +224,8 @@ def _judge(fn: Function, case: Case, expected: Any, out: Outcome, limits: Limits
         if out.error.get("type") == "NotImplementedError":
             return CaseResult(case, "not_implemented", "not implemented yet", None, expected)
         text = _error_text(out.error, locate)
-        if out.error.get("type") == "MemoryError":
-            text += f" (the memory limit is {limits.memory_mb} MB)"
+        if out.error.get("type") == "MemoryError" and memory_mb is not None:
+            text += f" (the memory limit is {memory_mb} MB)"
         for m in catalogue:
             hint = _explained(m, out.error, case)
             if hint:

@@ -15,17 +15,26 @@ what the machine allows (:func:`isolation`), strongest first:
     the submission.
 ``"unshare"``
     the same without the private file system (when mounts are not allowed).
-``"plain"`` (macOS, containers without namespaces)
+``"plain"`` (macOS with Python 3.13 or newer, containers without namespaces)
     a separate process group only; the child's audit hook alone keeps files, sockets and
     processes out of reach. Reports say so.
+``"portable"`` (Windows, older macOS Pythons, any system without the POSIX process controls
+of :func:`posix_controls`)
+    the audit hook alone, and no resource limits: no memory or CPU-time limit, and the
+    child alone is killed (it may start no process). Reports say so.
 
 In every case the child runs as ``python -I -S -B -u`` (isolated mode, no site-packages, no
-bytecode writes) with a minimal environment (no seed, no paths), a fresh working directory,
-address-space and file-size limits, and a CPU-time limit for its whole life sized for all
-its cases (a backstop); each case has a wall-clock deadline enforced here. A case that
-hangs, crashes the interpreter or answers with garbage is *fatal*: the child is killed and a
-fresh one runs the remaining cases, so one slow or crashing case costs only itself (after
+bytecode writes) with a minimal environment (no seed, no paths) in a fresh working
+directory, and talks to the grader over its own standard input and output (the child moves
+them out of the submission's reach); each case has a wall-clock deadline enforced here, by
+waiting for the child's answer on a thread (:class:`Replies`), which works on every
+platform. At the POSIX levels it also has address-space and file-size limits, and a
+CPU-time limit for its whole life sized for all its cases (a backstop). A case that hangs,
+crashes the interpreter or answers with garbage is *fatal*: the child is killed and a fresh
+one runs the remaining cases, so one slow or crashing case costs only itself (after
 ``Limits.max_fatal`` of them in one test, or one forged answer, the rest of it is skipped).
+The levels differ only in the command that starts the child, whether it limits itself, and
+how it is ended (:meth:`Sandbox._reap`).
 """
 
 from __future__ import annotations
@@ -34,6 +43,7 @@ import glob
 import json
 import math
 import os
+import queue
 import secrets
 import shutil
 import signal
@@ -42,11 +52,13 @@ import subprocess
 import sys
 import sysconfig
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
 from functools import cache
+from importlib.util import find_spec
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -54,28 +66,26 @@ from .protocol import ProtocolError, Value, decode_value, encode_args, read_fram
 
 RUNTIME = (Path(__file__).with_name("child.py"), Path(__file__).with_name("protocol.py"))
 UNSHARE = ["unshare", "--user", "--map-root-user", "--net", "--pid", "--fork", "--kill-child"]
-LEVELS = ("namespaces", "unshare", "plain")
+LEVELS = ("namespaces", "unshare", "plain", "portable")  # strongest first
 FATAL = ("timeout", "crash", "garbage")
 INSIDE = "/sandbox"  # where the working directory, the child's code and numpy appear
 # The shell stays the namespace's first process and exits with the child's status (128 + n
 # for a signal n), so the status of a child killed by a signal is never lost. The child's
-# stderr is the shell's, kept on a spare descriptor ($1); the shell's own (its "Killed"
-# notices, printed outside the subshell that runs the child) goes to /dev/null.
+# stderr is the shell's, kept on descriptor 3 (free: the grader's pipes are 0 and 1); the
+# shell's own (its "Killed" notices, printed outside the subshell that runs the child) goes
+# to /dev/null.
 WAIT_SCRIPT = r"""
-spare=$1
-shift
-eval "exec $spare>&2 2>/dev/null"
-eval "(exec \"\$@\" 2>&$spare $spare>&-)"
+exec 3>&2 2>/dev/null
+(exec "$@" 2>&3 3>&-)
 exit $?
 """
-# Arguments: the new root (a skeleton of empty mount points, made by Sandbox), the spare
-# descriptor, (kind, source, target) triples, then "--" and the command. One process per
-# mount; then the command runs as in WAIT_SCRIPT.
+# Arguments: the new root (a skeleton of empty mount points, made by Sandbox), (kind,
+# source, target) triples, then "--" and the command. One process per mount; then the
+# command runs as in WAIT_SCRIPT.
 MOUNT_SCRIPT = r"""
 set -eu
 root=$1
-spare=$2
-shift 2
+shift
 mount --rbind "$root" "$root"
 while [ "$1" != "--" ]; do
     case $1 in
@@ -88,8 +98,8 @@ done
 shift
 mount -o remount,bind,ro "$root"
 set +e
-eval "exec $spare>&2 2>/dev/null"
-eval "(exec chroot \"\$root\" \"\$@\" 2>&$spare $spare>&-)"
+exec 3>&2 2>/dev/null
+(exec chroot "$root" "$@" 2>&3 3>&-)
 exit $?
 """
 
@@ -100,7 +110,8 @@ class Limits:
 
     ``case_timeout`` is the wall-clock time one case may take; ``cpu_seconds`` the CPU time
     one interpreter may use over its whole life, a backstop for work the deadlines do not
-    see (threads); None sizes it for every case to use its ``case_timeout``.
+    see (threads); None sizes it for every case to use its ``case_timeout``. The
+    ``"portable"`` level keeps the wall-clock limits only.
     """
 
     cpu_seconds: float | None = None
@@ -131,20 +142,100 @@ ISOLATION_NOTES = {
                "processes, and its audit hook keeps files outside its folder out of reach.)",
     "plain": "(No Linux namespaces here: the sandbox still limits time, memory, files and "
              "imports, with its audit hook alone.)",
+    "portable": "(Weaker isolation on this system: the sandbox's audit hook alone keeps "
+                "files, imports, sockets and processes out of reach, and each case still has "
+                "its time limit, but memory and CPU time are not limited.)",
 }
 
 
 @cache
 def isolation() -> str:
     """The strongest level of :data:`LEVELS` that starts a working child here (probed once:
-    a child is started at each level in turn until one loads an empty submission)."""
-    for level in LEVELS[:-1]:
-        if sys.platform != "linux" or not shutil.which("unshare"):
-            break
-        with Sandbox("", [], Limits(load_timeout=20.0), frozenset(), level=level) as box:
-            if box.start().status == "ok":
-                return level
+    on Linux with ``unshare`` a child is started at each namespace level in turn until one
+    loads an empty submission)."""
+    if not posix_controls():
+        return "portable"
+    if sys.platform == "linux" and shutil.which("unshare"):
+        for level in LEVELS[:2]:
+            with Sandbox("", [], Limits(load_timeout=20.0), frozenset(), level=level) as box:
+                if box.start().status == "ok":
+                    return level
     return "plain"
+
+
+def posix_controls() -> bool:
+    """Whether this system has what the levels above ``"portable"`` use: process groups
+    (``os.killpg``), a child's exit status without reaping it (``os.waitid``, missing on
+    macOS before Python 3.13) and its CPU time (``os.wait4``), and resource limits."""
+    return os.name == "posix" and find_spec("resource") is not None and all(
+        hasattr(os, f) for f in ("killpg", "waitid", "wait4"))
+
+
+def level_for(requested: str | None) -> str:
+    """``requested`` if this machine offers it (it or a stronger level), else ValueError;
+    None: the strongest, :func:`isolation`."""
+    best = isolation()
+    if requested is None:
+        return best
+    if requested not in LEVELS:
+        raise ValueError(f"isolation: {requested!r} is not one of {', '.join(LEVELS)}")
+    if LEVELS.index(requested) < LEVELS.index(best):
+        raise ValueError(f"isolation: {requested!r} is not available on this machine (the "
+                         f"strongest here is {best!r})")
+    return requested
+
+
+class Replies:
+    """The child's frames from ``stream``, each read on a thread when it is asked for, so
+    that waiting for one can end at a deadline on every platform (``select`` cannot wait on
+    a pipe on Windows), and a child writing frames in a loop only fills its pipe."""
+
+    def __init__(self, stream: BinaryIO):
+        self.stream = stream
+        self._asked = threading.Semaphore(0)
+        self._got: queue.SimpleQueue[tuple[Any, Exception | None]] = queue.SimpleQueue()
+        self._pending = False  # a frame was asked for and has not come yet
+        self._closed = False
+        self._thread = threading.Thread(target=self._read, daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        while True:
+            self._asked.acquire()
+            if self._closed:
+                return
+            try:
+                frame, error = read_frame(self.stream.fileno()), None
+            except ProtocolError as exc:
+                frame, error = None, exc
+            except OSError:  # the pipe is gone: as good as its end
+                frame, error = None, None
+            self._got.put((frame, error))
+            if frame is None:
+                return
+
+    def get(self, deadline: float) -> Any | None:
+        """The next frame; None at end of file (the child is gone); ``TimeoutError`` past
+        ``deadline`` (monotonic); ``ProtocolError`` for a malformed one."""
+        if not self._pending:
+            self._pending = True
+            self._asked.release()
+        try:
+            frame, error = self._got.get(timeout=max(0.0, deadline - time.monotonic()))
+        except queue.Empty:
+            raise TimeoutError from None
+        self._pending = False
+        if error is not None:
+            raise error
+        return frame
+
+    def close(self) -> None:
+        """Stop the thread (once the child is gone, its read ends) and close the pipe."""
+        self._closed = True
+        self._asked.release()
+        self._thread.join(timeout=1.0)
+        if not self._thread.is_alive():  # else a process still holds the pipe: leave it be
+            self.stream.close()
 
 
 def _numpy_dirs() -> tuple[str, list[str]]:
@@ -226,10 +317,13 @@ class Sandbox:
         self.limits = limits
         self.functions = functions
         self.allowed = sorted(allowed_imports)
-        self.level = level
+        self.level = level or isolation()
+        self.posix = self.level != "portable"  # process groups, wait4, rlimits
+        self.memory_mb = limits.memory_mb if self.posix else None  # None: no limit
         self.cpu_seconds = math.ceil(limits.cpu_seconds if limits.cpu_seconds is not None
                                      else limits.load_timeout + limits.case_timeout * cases)
-        self.root = Path(tempfile.mkdtemp(prefix="autograder-"))
+        # the real, long path (no symbolic link, no Windows ~1 name): what the child's hook sees
+        self.root = Path(os.path.realpath(tempfile.mkdtemp(prefix="autograder-")))
         self.work = self.root / "work"
         self.work.mkdir()
         self.runtime = self.root / "runtime"
@@ -241,8 +335,8 @@ class Sandbox:
         self.missing: list[str] = []
         self.load_error: dict[str, Any] | None = None
         self.stdout = self.root / "stdout.txt"
-        self._fds: tuple[int, ...] = ()
-        self._wrapped = False  # a shell between us and the child (see WAIT_SCRIPT)
+        self._replies: Replies | None = None
+        self._wrapped = self.level in ("namespaces", "unshare")  # a shell, see WAIT_SCRIPT
 
     def __enter__(self) -> Sandbox:
         return self
@@ -255,9 +349,6 @@ class Sandbox:
 
     def _command(self, level: str, config: dict) -> list[str]:
         python = os.path.realpath(sys.executable)
-        # a descriptor the shell may use (one digit, not one of the child's pipes)
-        spare = str(next(n for n in range(3, 10) if n not in (config["req_fd"],
-                                                               config["res_fd"])))
         if level == "namespaces":
             child = f"{INSIDE}/runtime/child.py"
             config.update(cwd=f"{INSIDE}/work", submission=f"{INSIDE}/work/submission.py",
@@ -276,33 +367,26 @@ class Sandbox:
             fs = self.root / "fs"
             if not fs.exists():
                 _skeleton(fs, mounts)
-            return [*UNSHARE, "--mount", "sh", "-c", MOUNT_SCRIPT, "sh", str(fs), spare,
+            return [*UNSHARE, "--mount", "sh", "-c", MOUNT_SCRIPT, "sh", str(fs),
                     *(x for m in mounts if m[0] != "link" for x in m), "--", *cmd]
         if level == "unshare":
-            return [*UNSHARE, "sh", "-c", WAIT_SCRIPT, "sh", spare, *cmd]
+            return [*UNSHARE, "sh", "-c", WAIT_SCRIPT, "sh", *cmd]
         return cmd
 
     def start(self) -> Outcome:
         """Start a child and wait until the submission is loaded (status ``ok`` if it is)."""
-        level = self.level or isolation()
-        req_r, self._req = os.pipe()
-        self._res, res_w = os.pipe()
-        self._fds = (self._req, self._res)
-        config = {"req_fd": req_r, "res_fd": res_w, "functions": self.functions,
-                  "allowed": self.allowed, "cpu_seconds": self.cpu_seconds,
-                  "memory_mb": self.limits.memory_mb}
-        cmd = self._command(level, config)
-        self._wrapped = level != "plain"
-        env = {"PATH": "/usr/bin:/bin:/usr/sbin:/sbin", "HOME": config["cwd"],
-               "PWD": config["cwd"], "TMPDIR": config["cwd"], "LANG": "C.UTF-8",
-               "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-        with open(self.stdout, "ab") as out:
+        config = {"functions": self.functions, "allowed": self.allowed,
+                  "limits": {"cpu_seconds": self.cpu_seconds, "memory_mb": self.memory_mb}
+                  if self.posix else None}
+        cmd = self._command(self.level, config)
+        with open(self.stdout, "ab") as log:
             self.proc = subprocess.Popen(
-                cmd, cwd=self.work, env=env, stdin=subprocess.DEVNULL, stdout=out,
-                stderr=subprocess.STDOUT, pass_fds=(req_r, res_w), start_new_session=True,
+                cmd, cwd=self.work, env=_environment(config["cwd"]), stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE, stderr=log, bufsize=0, start_new_session=self.posix,
+                creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0),  # Windows: no console
             )
-        os.close(req_r)
-        os.close(res_w)
+        assert self.proc.stdout is not None
+        self._replies = Replies(self.proc.stdout)
         first = self._receive(time.monotonic() + self.limits.load_timeout, "your file")
         if first.status != "ok":
             return first
@@ -318,29 +402,35 @@ class Sandbox:
         return Outcome("ok")
 
     def stop(self) -> None:
-        """Kill the child's whole process group (and, under unshare, its PID namespace)."""
+        """Kill the child (at the POSIX levels its whole process group and, under unshare,
+        its PID namespace)."""
         if self.proc is None:
             return
         self._reap(None)
-        self._close()
-
-    def _close(self) -> None:
-        for fd in self._fds:
-            try:
-                os.close(fd)
-            except OSError:
-                pass
-        self._fds = ()
+        if self.proc.stdin is not None:
+            self.proc.stdin.close()
+        if self._replies is not None:
+            self._replies.close()
+        self._replies = None
         self.proc = None
 
     def _reap(self, timeout: float | None) -> tuple[int | None, float | None]:
         """End the child: wait up to ``timeout`` s for it to exit by itself (None: kill it
         now), kill what is left of its process group, and reap it. Returns its exit code
         (negative for a signal, as :class:`subprocess.Popen` has it) and the CPU seconds it
-        and its descendants used, or ``(None, None)`` if it is still running."""
+        and its descendants used (None at the portable level), or ``(None, None)`` if it is
+        still running."""
         proc = self.proc
         if proc is None or proc.returncode is not None:
             return (None, None) if proc is None else (proc.returncode, None)
+        if not self.posix:  # no process group (it may start no process), no rusage
+            if timeout is not None:
+                try:
+                    proc.wait(timeout)
+                except subprocess.TimeoutExpired:
+                    return None, None
+            proc.kill()  # nothing once it has exited
+            return proc.wait(), None
         deadline = None if timeout is None else time.monotonic() + timeout
         while deadline is not None:  # exited? (WNOWAIT: not reaped, so its group id stays ours)
             if os.waitid(os.P_PID, proc.pid, os.WEXITED | os.WNOWAIT | os.WNOHANG) is not None:
@@ -388,9 +478,10 @@ class Sandbox:
     def _run(self, fn: str, cases: list[tuple[Any, ...]]) -> list[Outcome]:
         """One request to the live child: the outcomes up to and including a fatal one."""
         nonce = secrets.token_hex(16)
+        assert self.proc is not None and self.proc.stdin is not None
         try:
-            write_frame(self._req, {"fn": fn, "cases": [encode_args(a) for a in cases],
-                                    "nonce": nonce})
+            write_frame(self.proc.stdin.fileno(), {"fn": fn, "nonce": nonce,
+                                                   "cases": [encode_args(a) for a in cases]})
         except OSError:
             return [self._fatal("crash", fn)]
         outcomes: list[Outcome] = []
@@ -416,8 +507,9 @@ class Sandbox:
     def _receive(self, deadline: float, what: str) -> Outcome:
         """The next frame as ``Outcome("ok", value=frame)``, or a fatal outcome; ``what`` is
         running (a function's name, or "your file" while loading) for the messages."""
+        assert self._replies is not None
         try:
-            frame = read_frame(self._res, deadline)
+            frame = self._replies.get(deadline)
         except TimeoutError:
             if what == "your file":
                 return self._fatal("timeout", f"your file did not finish loading within "
@@ -438,7 +530,7 @@ class Sandbox:
         self.stop()
         if status == "crash":
             return Outcome("crash", message=_crash_message(code, cpu, what, self.cpu_seconds,
-                                                           self.limits))
+                                                           self.memory_mb))
         return Outcome(status, message=what)
 
     def output(self, limit: int = 2000) -> str:
@@ -448,6 +540,18 @@ class Sandbox:
                 return f.read(limit).decode("utf-8", "replace")
         except OSError:
             return ""
+
+
+def _environment(cwd: str) -> dict[str, str]:
+    """The child's whole environment: no seed, no paths but the system's, one BLAS thread
+    (Windows needs its SYSTEMROOT to start)."""
+    env = {"PATH": "/usr/bin:/bin:/usr/sbin:/sbin", "HOME": cwd, "PWD": cwd, "TMPDIR": cwd,
+           "LANG": "C.UTF-8", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1",
+           "MKL_NUM_THREADS": "1"}
+    if os.name == "nt":
+        env.update(SYSTEMROOT=os.environ.get("SYSTEMROOT", r"C:\Windows"), TEMP=cwd, TMP=cwd,
+                   USERPROFILE=cwd)
+    return env
 
 
 def _error(e: Any) -> dict[str, Any]:
@@ -470,21 +574,24 @@ def _forged(what: str) -> str:
 
 
 def _crash_message(code: int | None, cpu: float | None, what: str, cpu_limit: float,
-                   limits: Limits) -> str:
+                   memory_mb: int | None) -> str:
     """Why the interpreter stopped: the CPU time it used comes first, since the kernel ends a
-    process over its CPU limit with SIGXCPU or SIGKILL and a wrapper may report either."""
+    process over its CPU limit with SIGXCPU or SIGKILL and a wrapper may report either.
+    ``memory_mb`` None: no memory limit (the portable level)."""
     if cpu is not None and cpu >= 0.9 * cpu_limit:
         return (f"{what} ran out of CPU time: the interpreter used its {cpu_limit:g} s of CPU "
                 "time for all cases (threads still running?)")
     if code is None:
         return f"the interpreter stopped responding while {what} ran"
-    if code == -signal.SIGXCPU:
-        return f"{what} ran out of CPU time ({cpu_limit:g} s for all cases)"
-    if code == -signal.SIGKILL:
-        return f"the interpreter was killed while {what} ran (out of memory? the limit is " \
-               f"{limits.memory_mb} MB)"
-    if code < 0:
+    if code < 0:  # a signal: POSIX only (Windows codes are unsigned)
+        if -code == signal.SIGXCPU:
+            return f"{what} ran out of CPU time ({cpu_limit:g} s for all cases)"
+        if -code == signal.SIGKILL:
+            limit = f"the limit is {memory_mb} MB" if memory_mb else "there is no limit here"
+            return f"the interpreter was killed while {what} ran (out of memory? {limit})"
         name = signal.Signals(-code).name if -code in signal.valid_signals() else -code
         return f"the interpreter crashed ({name}) while {what} ran"
+    if code >= 0xC0000000:  # a Windows exception status (0xC0000005: access violation)
+        return f"the interpreter crashed (0x{code:08X}) while {what} ran"
     return (f"the interpreter exited (code {code}) while {what} ran; does your code call "
             "sys.exit(), exit() or os._exit()?")

@@ -11,6 +11,7 @@ import pytest
 
 from autograder import Limits, check
 from autograder.assignments import load
+from autograder.sandbox import isolation
 
 FIXTURES = Path(__file__).parent / "fixtures" / "a1"
 REPO = Path(__file__).resolve().parents[1]
@@ -35,9 +36,10 @@ def by_function(result, fn: str):
     return [t for t in result.tests if t.test.function == fn]
 
 
-def test_reference_gets_full_marks_including_hidden_tests():
+@pytest.mark.parametrize("level", [None, "portable"])
+def test_reference_gets_full_marks_including_hidden_tests(level):
     start = time.monotonic()
-    result = check("a1", FIXTURES / "reference.py", seed=SEED, limits=LIMITS)
+    result = check("a1", FIXTURES / "reference.py", seed=SEED, limits=LIMITS, isolation=level)
     assert time.monotonic() - start < 5.0
     assert result.hidden_run and result.score == result.max_score == 24
     assert "Score: 24 / 24 (all tests)" in str(result)
@@ -62,10 +64,11 @@ def test_catalogue_covers_every_mutant_and_is_rich_enough():
     assert expected == catalogue and len(catalogue) >= 6
 
 
-@pytest.mark.parametrize("name", MUTANTS)
-def test_mutant_is_diagnosed_by_name(name, tmp_path):
+@pytest.mark.parametrize(("name", "level"), [(m, None) for m in MUTANTS]
+                         + [(m, "portable") for m in MUTANTS[::6]])
+def test_mutant_is_diagnosed_by_name(name, level, tmp_path):
     fn, key = re.search(r"# expect: (\S+)", (FIXTURES / name).read_text()).group(1).split(":")
-    result = check("a1", submission(name, tmp_path), seed=SEED, limits=LIMITS)
+    result = check("a1", submission(name, tmp_path), seed=SEED, limits=LIMITS, isolation=level)
     failing = [t for t in result.tests if t.status != "passed"]
     assert failing and all(t.test.function == fn for t in failing)
     assert all(t.misconception and t.misconception.key == key for t in failing)
@@ -130,14 +133,22 @@ ADVERSARIAL = {
     "adv_forged_recursion.py": (0, ["while your file loaded, something else wrote to the "
                                     "grader's private result channel; nothing can be graded "
                                     "(JSON nested too deeply)"]),
+    "adv_garbage_bytes.py": (10, ["while quat_mul ran, something else wrote to the grader's "
+                                  "private result channel; this test scores 0 (not JSON"]),
 }
+# The portable level (Windows) has no memory limit: the bomb's 32 GiB would really be filled.
+PORTABLE_HOSTILE = sorted(set(ADVERSARIAL) - {"adv_memory_bomb.py"})
 
 
-@pytest.mark.parametrize("name", sorted(ADVERSARIAL))
-def test_hostile_submission_earns_nothing_it_did_not_compute(name, tmp_path, monkeypatch):
+@pytest.mark.parametrize(("name", "level"), [(n, None) for n in sorted(ADVERSARIAL)]
+                         + [(n, "portable") for n in PORTABLE_HOSTILE])
+def test_hostile_submission_earns_nothing_it_did_not_compute(name, level, tmp_path, monkeypatch):
+    """At the strongest level here and at the portable one (stdin/stdout pipes, a reader
+    thread for the deadlines, no rlimits): the same scores and messages."""
     monkeypatch.setenv("AUTOGRADER_SEED", SEED)  # in the grader's environment, not the child's
     path = submission(name, tmp_path)
-    result = check("a1", path, seed="", limits=LIMITS)  # "" -> falls back to the env seed
+    result = check("a1", path, seed="", limits=LIMITS, isolation=level)  # "": the env seed
+    assert result.isolation == (level or isolation())
     score, phrases = ADVERSARIAL[name]
     visible = sum(t.score for t in result.tests if not t.test.hidden)
     assert visible == score

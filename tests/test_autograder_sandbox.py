@@ -1,11 +1,16 @@
-"""The sandbox itself: the audit hook's own robustness, the private file system of the
-namespaces, the fallbacks, per-case limits and what the reports say when a limit is hit."""
+"""The sandbox itself: the audit hook's own robustness (POSIX and Windows paths), the private
+file system of the namespaces, the fallbacks down to the portable level (what Windows gets,
+run here on request), per-case limits and what the reports say when a limit is hit."""
 
 from __future__ import annotations
 
 import dis
+import ntpath
 import os
+import select
 import subprocess
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -16,9 +21,9 @@ from autograder import Limits, check
 from autograder.checks import Check, QuatCheck, StringsCheck, TupleCheck
 from autograder.child import make_hook
 from autograder.cli import main
-from autograder.protocol import ProtocolError, decode_value, read_frame
+from autograder.protocol import ProtocolError, decode_value, read_frame, write_frame
 from autograder.runner import describe_args
-from autograder.sandbox import INSIDE, Sandbox, isolation
+from autograder.sandbox import INSIDE, LEVELS, Replies, Sandbox, _crash_message, isolation
 from autograder.spec import Case, Function
 
 LIMITS = Limits(cpu_seconds=5, memory_mb=600, load_timeout=5.0, case_timeout=0.5)
@@ -51,13 +56,24 @@ def refused(hook, event: str, *args) -> str:
     return str(info.value)
 
 
-def test_the_hook_reads_no_global_and_has_no_cell_to_overwrite(hook):
+def helpers(f) -> dict[str, object]:
+    """The hook's own functions among its defaults, and theirs, by name."""
+    found = {}
+    for d in f.__defaults__ or ():
+        if getattr(d, "__qualname__", "").startswith("make_hook."):
+            found[d.__name__] = d
+            found.update(helpers(d))
+    return found
+
+
+@pytest.mark.parametrize("paths", ["posix", "nt"])
+def test_the_hook_reads_no_global_and_has_no_cell_to_overwrite(paths, hook, nt_hook):
     """Rebinding a builtin, os.path or the child's globals cannot change what the hook does,
     and its frame (which a refusal's traceback shows) holds nothing mutable."""
-    h, _ = hook
-    helpers = [d for d in h.__defaults__ if hasattr(d, "__code__")]
-    assert {f.__name__ for f in helpers} == {"resolve", "within", "may_read"}
-    for f in [h, *helpers]:
+    h = hook[0] if paths == "posix" else nt_hook
+    found = helpers(h)
+    assert set(found) == {"resolve", "locate", "within", "may_read"}
+    for f in [h, *found.values()]:
         ops = {i.opname for i in dis.get_instructions(f)}
         assert not ops & {"LOAD_GLOBAL", "LOAD_NAME", "LOAD_DEREF", "LOAD_CLOSURE"}, f.__name__
         assert f.__closure__ is None
@@ -98,6 +114,62 @@ def test_the_hook_checks_the_file_that_will_really_be_opened(hook, tmp_path):
     assert "outside" in refused(h, "os.listdir", "/")
 
 
+# A Windows machine as the nt functions show it: the real (long, exact-case) paths that exist,
+# and the aliases Windows resolves (an 8.3 short name, a junction into the course).
+NT_WORK = r"C:\Users\Ann\AppData\Local\Temp\autograder-x\work"
+NT_STDLIB = r"C:\Python311\Lib"
+NT_FILES = {NT_WORK, NT_WORK + r"\mine.py", NT_STDLIB, NT_STDLIB + r"\json\decoder.py",
+            NT_STDLIB + r"\site-packages", NT_STDLIB + r"\site-packages\scipy\x.py",
+            r"C:\course", r"C:\course\_checks.py"}
+NT_ALIASES = {NT_STDLIB + r"\SITE-P~1": NT_STDLIB + r"\site-packages",
+              NT_WORK + r"\j": r"C:\course"}
+
+
+def _nt_full(path: str) -> str:
+    """nt._getfullpathname: absolute (from the working directory), '.', '..' resolved."""
+    path = path.replace("/", "\\")
+    return ntpath.normpath(path if path[1:3] == ":\\" or path.startswith("\\")
+                           else NT_WORK + "\\" + path)
+
+
+def _nt_final(path: str) -> str:
+    """nt._getfinalpathname: the real path of an existing file, in its own case."""
+    for alias, real in NT_ALIASES.items():
+        if path.lower().startswith(alias.lower()):
+            path = real + path[len(alias):]
+    for real in NT_FILES:
+        if real.lower() == path.lower():
+            return "\\\\?\\" + real
+    raise FileNotFoundError(path)
+
+
+@pytest.fixture
+def nt_hook():
+    return make_hook(NT_WORK, (NT_STDLIB,), (NT_STDLIB + r"\site-packages",),
+                     frozenset({"numpy"}), nt_paths=(_nt_full, _nt_final))
+
+
+def test_windows_paths_are_checked_where_windows_opens_them(nt_hook):
+    """On Windows the kernel's own resolution decides: case and slashes do not matter, and
+    a short name, a junction or a stream cannot lead anywhere the folders do not allow."""
+    h = nt_hook
+    h("open", ("mine.py", "r", 0))
+    h("open", ("c:/users/ann/appdata/local/temp/autograder-x/WORK/new.txt", "w", 1))
+    h("open", (NT_STDLIB.lower() + r"\json\decoder.py", "r", 0))
+    for path, mode in [(NT_STDLIB + r"\SITE-PACKAGES\scipy\x.py", "r"),
+                       (NT_STDLIB + r"\SITE-P~1\scipy\x.py", "r"),
+                       (r"j\_checks.py", "r"),
+                       (r"..\..\..\..\..\..\..\course\_checks.py", "r"),
+                       (NT_STDLIB + r"\json\decoder.py", "w"),
+                       (r"\\server\share\_checks.py", "r")]:
+        assert "does not let submissions open" in refused(h, "open", path, mode, 0), path
+    for path in ("mine.py:hidden", r"\\?\C:\course\_checks.py", r"\\.\C:\course"):
+        assert "does not let submissions name" in refused(h, "open", path, "r", 0), path
+    assert "outside" in refused(h, "os.mkdir", r"C:\Python311\x", 0o777, -1)
+    assert "_winapi.CreateJunction" in refused(h, "_winapi.CreateJunction", "a", "b")
+    assert "os.startfile" in refused(h, "os.startfile", "x.exe")
+
+
 def test_ordinary_code_is_not_refused(tmp_path):
     """The standard library and numpy's corners work in the sandbox as they do anywhere."""
     result = check("a1", submission("legit_stdlib_heavy.py", tmp_path), limits=LIMITS)
@@ -127,8 +199,7 @@ def test_the_repository_and_everything_else_are_absent_from_the_sandbox(tmp_path
 def test_only_the_working_directory_is_writable_in_the_namespaces(tmp_path):
     """The same mounts with a shell in the child's place, no audit hook at all."""
     with Sandbox("", [], LIMITS, frozenset(), level="namespaces") as box:
-        config = {"req_fd": 0, "res_fd": 1, "functions": [], "allowed": [], "cpu_seconds": 5,
-                  "memory_mb": 100}
+        config = {"functions": [], "allowed": [], "limits": None}
         cmd = box._command("namespaces", config)
         cut = len(cmd) - cmd[::-1].index("--")  # the child's command follows the last "--"
         probe = ("for p in /usr/x /sandbox/runtime/x /x /sandbox/work/x; do "
@@ -140,23 +211,122 @@ def test_only_the_working_directory_is_writable_in_the_namespaces(tmp_path):
                             "usr", "opt", "home", "nix"}
 
 
-@pytest.mark.parametrize("level", ["unshare", "plain"])
-def test_weaker_isolation_still_holds_and_says_so(level, tmp_path, monkeypatch, capsys):
-    import autograder.cli
+NOTES = {"unshare": "No private file system here", "plain": "No Linux namespaces here",
+         "portable": "but memory and CPU time are not limited"}
+
+
+@pytest.mark.parametrize("level", ["unshare", "plain", "portable"])
+def test_weaker_isolation_still_holds_and_says_so(level, tmp_path, capsys):
+    if LEVELS.index(level) < LEVELS.index(isolation()):
+        pytest.skip(f"no {level} isolation on this machine")
+    result = check("a1", submission("adv_reads_reference.py", tmp_path), limits=LIMITS,
+                   isolation=level)
+    assert result.score == 0 and "does not let submissions open" in one_line(result)
+    assert result.isolation == level and NOTES[level] in one_line(result)
+    main(["grade", "--assignment", "a1", str(REPO / "tests/fixtures/a1/reference.py"), "--out",
+          str(tmp_path / "out"), "--seed", "s", "--isolation", level])
+    assert f"warning: isolation is weaker on this machine ({level})" in capsys.readouterr().err
+
+
+def test_an_isolation_this_machine_lacks_is_refused():
+    with pytest.raises(ValueError, match="isolation: 'sealed' is not one of"):
+        check("a1", REPO / "tests/fixtures/a1/reference.py", isolation="sealed")
+    if isolation() != "namespaces":
+        with pytest.raises(ValueError, match="not available on this machine"):
+            check("a1", REPO / "tests/fixtures/a1/reference.py", isolation="namespaces")
+
+
+# --- the portable level ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("key", ["a1", "a2", "a3"])
+def test_the_references_get_full_marks_at_the_portable_level(key):
+    result = check(key, REPO / f"tests/fixtures/{key}/reference.py", seed="portable-seed",
+                   limits=Limits(case_timeout=2.0), isolation="portable")
+    assert result.isolation == "portable" and not result.problems
+    assert {t.status for t in result.tests} == {"passed"}, str(result)
+
+
+def test_the_portable_child_loads_no_posix_only_module(tmp_path):
+    """What Windows lacks is never imported by the child (numpy's own imports included)."""
+    posix_only = ("resource", "fcntl", "select", "termios", "pwd", "grp", "_posixsubprocess")
+    src = ("import sys\n\n\ndef quat_mul(a, b):\n"
+           f"    raise RuntimeError(str([m for m in {posix_only!r} if m in sys.modules]))\n")
+    (tmp_path / "a1_rotations.py").write_text(src)
+    result = check("a1", tmp_path / "a1_rotations.py", limits=LIMITS, isolation="portable")
+    assert "quat_mul raised RuntimeError: []" in one_line(result)
+
+
+def test_without_posix_process_controls_the_portable_level_is_chosen_and_holds(
+        tmp_path, monkeypatch):
+    """As on Windows: no process groups, wait4, waitid or select on pipes. The portable level
+    is chosen, and a timeout or a crash still costs only its own case."""
     import autograder.sandbox
 
-    monkeypatch.setattr(autograder.sandbox, "isolation", lambda: level)
-    monkeypatch.setattr(autograder.runner, "isolation", lambda: level)
-    if level == "unshare" and autograder.sandbox.LEVELS.index(isolation()) > 1:
-        pytest.skip("no user namespaces on this machine")
-    result = check("a1", submission("adv_reads_reference.py", tmp_path), limits=LIMITS)
-    assert result.score == 0 and "does not let submissions open" in one_line(result)
-    note = "No private file system here" if level == "unshare" else "No Linux namespaces here"
-    assert note in str(result)
-    monkeypatch.setattr(autograder.cli, "isolation", lambda: level)
-    main(["grade", "--assignment", "a1", str(REPO / "tests/fixtures/a1/reference.py"), "--out",
-          str(tmp_path / "out"), "--seed", "s"])
-    assert f"warning: isolation is weaker on this machine ({level})" in capsys.readouterr().err
+    isolation()  # probed with everything there
+    for name in ("killpg", "wait4", "waitid"):
+        monkeypatch.delattr(os, name)
+
+    def no_select(*args):
+        raise AssertionError("select() on a pipe: Windows has none")
+
+    monkeypatch.setattr(select, "select", no_select)
+    assert autograder.sandbox.isolation.__wrapped__() == "portable"
+    result = check("a1", submission("adv_infinite_loop.py", tmp_path), limits=LIMITS,
+                   isolation="portable")
+    mul = [t for t in result.tests if t.test.function == "quat_mul"]
+    assert {c.kind for t in mul for c in t.cases} == {"timeout", "skipped"}
+    assert result.score == 10  # every other function's tests ran, in fresh interpreters
+    assert ("quat_mul did not finish within 0.5 s on this case (an endless loop, or too "
+            "slow?)") in one_line(result)
+    result = check("a1", submission("adv_exits.py", tmp_path), limits=LIMITS,
+                   isolation="portable")
+    assert result.score == 6 and ("the interpreter exited (code 0) while slerp ran; does your "
+                                  "code call") in one_line(result)
+
+
+def _frame(obj) -> bytes:
+    r, w = os.pipe()
+    write_frame(w, obj)
+    os.close(w)
+    data = os.read(r, 1 << 16)
+    os.close(r)
+    return data
+
+
+def test_replies_wait_with_a_deadline_and_read_only_what_is_asked_for():
+    """The reader thread behind every level's deadlines: a frame late by more than the
+    deadline is a TimeoutError, it is still the next one returned, nothing is read ahead,
+    and garbage and the end of the pipe are told apart."""
+    r, w = os.pipe()
+    replies = Replies(os.fdopen(r, "rb", buffering=0))
+    late = threading.Timer(0.3, os.write, (w, _frame({"n": 1})))
+    late.start()
+    with pytest.raises(TimeoutError):
+        replies.get(time.monotonic() + 0.05)
+    assert replies.get(time.monotonic() + 5) == {"n": 1}
+    os.write(w, _frame({"n": 2}) + _frame({"n": 3}))
+    assert replies.get(time.monotonic() + 5) == {"n": 2}
+    assert select.select([r], [], [], 0.1)[0]  # frame 3 is still in the pipe, unread
+    assert replies.get(time.monotonic() + 5) == {"n": 3}
+    os.write(w, b"\x00\x00\x00\x03abc")
+    with pytest.raises(ProtocolError, match="not JSON"):
+        replies.get(time.monotonic() + 5)
+    os.close(w)
+    replies.close()
+    r2, w2 = os.pipe()
+    ended = Replies(os.fdopen(r2, "rb", buffering=0))
+    os.close(w2)
+    assert ended.get(time.monotonic() + 5) is None
+    ended.close()
+    assert ended.stream.closed
+
+
+def test_crash_messages_name_signals_and_windows_statuses():
+    assert "crashed (0xC0000005)" in _crash_message(0xC0000005, None, "f", 9, None)
+    assert "exited (code 3)" in _crash_message(3, None, "f", 9, None)
+    assert "out of memory? there is no limit here" in _crash_message(-9, None, "f", 9, None)
+    assert "out of memory? the limit is 600 MB" in _crash_message(-9, None, "f", 9, 600)
 
 
 # --- limits per case ---------------------------------------------------------------------------
