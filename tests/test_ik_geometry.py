@@ -251,7 +251,8 @@ def test_arc_turn_matches_arc_matrix_including_opposite_and_zero():
     """The serial path's shortest arc (quaternion components, floats and arrays) is the general
     path's arc_matrix: generic pairs, exactly opposite pairs (a half turn about the same
     perpendicular axis) and a zero vector (the identity)."""
-    from course.ik._serial import ARRAYS, FLOATS, arc_turn
+    from course.ik._ops import ARRAYS, FLOATS
+    from course.ik._serial import arc_turn
     from course.ik._small import arc_matrix
 
     rng = np.random.default_rng(21)

@@ -429,3 +429,79 @@ def test_singular_pose_reported(method, fast, monkeypatch):
     r = solve(arm, IDENT, np.zeros(3), {"end_effector": [3.0, 2.0, 2.0]}, method=method)
     assert not r.converged and r.reason == "singular"
     np.testing.assert_allclose(r.error, 2.0, atol=1e-6)  # the in-plane part is reached
+
+
+@pytest.mark.parametrize("method", [m for m in METHODS if m != "two_link"])
+@pytest.mark.parametrize("fast", [True, False])
+def test_result_of_one_problem_and_of_a_batch(method, fast, monkeypatch):
+    """One problem's result holds plain values (bool, int, str, residuals (T,), arrays without a
+    batch axis) whether the fast path solved it in floats or the general model as a batch of
+    one; a batch's holds arrays (B,) and residuals (T, B); and each single solve is its row of
+    the batch. Targets: reachable, beyond reach (stretched, one pass) and a capped solve."""
+    import course.ik.api as api
+
+    monkeypatch.setattr(api, "_FAST_PATH", fast)
+    sk = BALL if method == "fabrik" else HINGE
+    targets = np.vstack([_reachable_targets(3, seed=19), [[9.0, 1.0, 0.0]]])
+    kw = dict(method=method, max_iter=25)
+    batch = solve(sk, IDENT, np.zeros(3), {"end_effector": targets}, **kw)
+    B = len(targets)
+    assert batch.converged.dtype == bool and batch.converged.shape == (B,)
+    assert batch.iterations.dtype.kind == "i" and batch.reason.dtype == "<U14"
+    assert batch.residuals.shape == (batch.iterations.max() + 1, B)
+    assert batch.local_rotations.shape == (B, 8, 4) and batch.positions.shape == (B, 8, 3)
+    assert batch.reason[-1] == "unreachable"
+    for i, t in enumerate(targets):
+        r = solve(sk, IDENT, np.zeros(3), {"end_effector": t}, **kw)
+        assert type(r.converged) is bool and type(r.iterations) is int
+        assert type(r.reason) is str
+        assert r.residuals.dtype == np.float64 and r.residuals.shape == (r.iterations + 1,)
+        assert r.local_rotations.shape == (8, 4) and r.positions.shape == (8, 3)
+        assert r.root_position.shape == (3,)
+        assert (r.converged, r.iterations, r.reason) == (
+            batch.converged[i], batch.iterations[i], batch.reason[i])
+        np.testing.assert_allclose(r.residuals, batch.residuals[:r.iterations + 1, i],
+                                   atol=1e-9)
+        np.testing.assert_allclose(r.positions, batch.positions[i], atol=1e-9)
+
+
+def test_history_of_one_problem_in_floats_keeps_a_batchs_books():
+    """The bookkeeping of one problem in floats (the fast path) is that of its column in a
+    batch: iterations, residuals, the stall test, the iteration cap, and the reasons in their
+    order of precedence (converged, unreachable, singular, stalled, max_iterations)."""
+    from course.ik._ops import ARRAYS, FLOATS
+    from course.ik.result import History
+
+    tol, max_iter, T = 1e-3, 12, 16
+    k = np.arange(T + 1)[:, None]
+    errors = np.hstack([
+        0.5 ** k,                           # converges at iteration 10
+        np.full((T + 1, 1), 0.5),           # no progress: stalls after the window
+        1.0 - 0.01 * k,                     # still falling at the cap
+        np.full((T + 1, 1), 0.2),           # stalls on a lost-rank Jacobian
+        np.full((T + 1, 1), 0.3),           # stalls, out of reach
+        np.zeros((T + 1, 1)),               # there at the start
+    ])
+    singular = np.array([False, False, False, True, False, False])
+    unreachable = np.array([False, False, False, False, True, False])
+    want = ["", "stalled", "max_iterations", "singular", "unreachable", ""]
+
+    batch = History(errors[0], tol, max_iter, ops=ARRAYS)
+    for e in errors[1:]:
+        if batch.active.any():
+            batch.update(e)
+    batch.singular = singular
+    assert list(batch.reasons(unreachable)) == want
+    for i in range(errors.shape[1]):
+        one = History(float(errors[0, i]), tol, max_iter, ops=FLOATS)
+        for e in errors[1:, i]:
+            if one.active:
+                one.update(float(e))
+        one.singular = bool(singular[i])
+        assert type(one.iterations) is int and type(one.converged) is bool
+        assert one.iterations == batch.iterations[i] and one.converged == batch.converged[i]
+        assert one.reasons(bool(unreachable[i])) == want[i]
+        column = np.array(batch.residuals)[:, i]
+        assert one.residuals == column[:one.iterations + 1].tolist()
+        assert np.all(column[one.iterations:] == one.error)  # held once stopped
+    assert batch.iterations.tolist() == [10, 8, 12, 8, 8, 0]

@@ -12,8 +12,9 @@ is written here on quaternions and 3-vectors held as tuples of *components*: a v
 ``(x, y, z)``, a quaternion ``(w, x, y, z)``, and each component is either a Python float (one
 problem: plain float arithmetic costs ~50 ns where a numpy call on a tiny array costs ~1 µs)
 or an ndarray of shape ``(B,)`` (a batch: every line is then one vectorised, contiguous
-operation over all ``B`` problems). The same code runs both ways; ``ops`` (:data:`FLOATS` or
-:data:`ARRAYS`) supplies the handful of functions that differ (``sqrt``, ``where``, ...).
+operation over all ``B`` problems). The same code runs both ways; ``ops``
+(:data:`~course.ik._ops.FLOATS` or :data:`~course.ik._ops.ARRAYS`) supplies the handful of
+functions that differ (``sqrt``, ``where``, ...).
 
 The solvers here are the same methods as :mod:`course.ik.jacobian` and :mod:`course.ik.fabrik`
 on the general :class:`~course.ik._chains.Problem` (tests check both give the same answer):
@@ -27,12 +28,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import reduce
+from functools import cached_property, reduce
 from typing import Any
 
 import numpy as np
 
 from ._chains import bend_increment, outside_shell
+from ._ops import FLOATS
 from ._small import TINY
 from .jacobian import lost_rank
 from .result import History
@@ -40,152 +42,6 @@ from .result import History
 Scalar = Any  # a float, or an ndarray (B,)
 Vec = tuple  # (x, y, z) of Scalars
 Quat = tuple  # (w, x, y, z) of Scalars
-
-
-# --------------------------------------------------------------------------- ops
-class _Floats:
-    """Component operations for one problem in Python floats."""
-
-    sqrt, sin, cos, atan2, dist = (staticmethod(f) for f in (math.sqrt, math.sin, math.cos,
-                                                             math.atan2, math.dist))
-    abs = staticmethod(abs)
-
-    @staticmethod
-    def where(c: bool, a: Any, b: Any) -> Any:
-        return a if c else b
-
-    select = where  # whole structures (tuples of components) at once
-
-    @staticmethod
-    def maximum(a: float, b: float) -> float:
-        return a if a > b else b
-
-    @staticmethod
-    def minimum(a: float, b: float) -> float:
-        return a if a < b else b
-
-    @staticmethod
-    def batch(x: Any) -> np.ndarray:
-        return np.array([x])
-
-    @staticmethod
-    def flag(mask: np.ndarray) -> bool:
-        return bool(mask[0])
-
-    @staticmethod
-    def symmetric(A: tuple) -> np.ndarray:
-        a00, a01, a02, a11, a12, a22 = A
-        return np.array([[a00, a01, a02], [a01, a11, a12], [a02, a12, a22]])
-
-    @staticmethod
-    def vector(x: np.ndarray) -> Vec:
-        return tuple(x.tolist())
-
-    @staticmethod
-    def stack(items: list[tuple], batch: int) -> np.ndarray:
-        return np.array(items)[None]
-
-    @staticmethod
-    def both(a: bool, b: bool) -> bool:
-        return a and b
-
-    @staticmethod
-    def invert(a: bool) -> bool:
-        return not a
-
-    # One problem's flags are plain bools already (the builtin is the fastest identity).
-    any = all = staticmethod(bool)
-
-    @staticmethod
-    def take(x: Any, idx: Any) -> Any:
-        return x
-
-    @staticmethod
-    def copy(x: Any) -> Any:
-        return x  # floats and tuples are immutable
-
-    @staticmethod
-    def put(full: Any, idx: Any, part: Any) -> Any:
-        return part
-
-
-class _Arrays:
-    """Component operations for a batch: every component an ndarray (B,)."""
-
-    sqrt, sin, cos, atan2, abs = (staticmethod(f) for f in (np.sqrt, np.sin, np.cos, np.arctan2,
-                                                            np.abs))
-    where, maximum, minimum = (staticmethod(f) for f in (np.where, np.maximum, np.minimum))
-
-    @staticmethod
-    def dist(a: Vec, b: Vec) -> np.ndarray:
-        """Distance between two points (components (B,) or floats)."""
-        x, y, z = a[0] - b[0], a[1] - b[1], a[2] - b[2]
-        return np.sqrt(x * x + y * y + z * z)
-
-    @staticmethod
-    def select(c: np.ndarray, a: Any, b: Any) -> Any:
-        if isinstance(a, tuple | list):
-            return type(a)(_Arrays.select(c, x, y) for x, y in zip(a, b, strict=True))
-        return np.where(c, a, b)
-
-    @staticmethod
-    def batch(x: np.ndarray) -> np.ndarray:
-        return x
-
-    @staticmethod
-    def flag(mask: np.ndarray) -> np.ndarray:
-        return mask
-
-    @staticmethod
-    def symmetric(A: tuple) -> np.ndarray:
-        a00, a01, a02, a11, a12, a22 = np.broadcast_arrays(*A)
-        return np.stack([np.stack([a00, a01, a02], -1), np.stack([a01, a11, a12], -1),
-                         np.stack([a02, a12, a22], -1)], -2)
-
-    @staticmethod
-    def vector(x: np.ndarray) -> Vec:
-        return tuple(np.moveaxis(x, -1, 0))
-
-    @staticmethod
-    def stack(items: list[tuple], batch: int) -> np.ndarray:
-        return np.stack([np.stack([np.broadcast_to(c, (batch,)) for c in x], -1)
-                         for x in items], 1)
-
-    both, invert = staticmethod(np.logical_and), staticmethod(np.logical_not)
-
-    @staticmethod
-    def any(a: np.ndarray) -> bool:
-        return bool(a.any())
-
-    @staticmethod
-    def all(a: np.ndarray) -> bool:
-        return bool(np.all(a))
-
-    @staticmethod
-    def take(x: Any, idx: np.ndarray) -> Any:
-        """``x[idx]`` for every array in a structure (the problems still running)."""
-        if isinstance(x, tuple | list):
-            return type(x)(_Arrays.take(c, idx) for c in x)
-        return x[idx] if isinstance(x, np.ndarray) and x.ndim else x
-
-    @staticmethod
-    def copy(x: Any) -> Any:
-        if isinstance(x, tuple | list):
-            return type(x)(_Arrays.copy(c) for c in x)
-        return x.copy() if isinstance(x, np.ndarray) else x
-
-    @staticmethod
-    def put(full: Any, idx: np.ndarray, part: Any) -> Any:
-        """``full[idx] = part`` for every array in a structure, in place."""
-        if isinstance(full, tuple | list):
-            for f, q in zip(full, part, strict=True):
-                _Arrays.put(f, idx, q)
-        else:
-            full[idx] = part
-        return full
-
-
-FLOATS, ARRAYS = _Floats(), _Arrays()
 
 
 # --------------------------------------------------------------------------- vectors
@@ -231,13 +87,16 @@ def qrot(q: Quat, v: Vec) -> Vec:
             vz + w * tz + x * ty - y * tx)
 
 
-def unit_like(q: Quat, ref: Quat, ops: Any) -> Quat:
-    """``q`` normalised, with the sign of ``ref`` (``q`` and ``-q`` are one rotation: keeping
-    the starting quaternion's sign spares an animated solve its sign flips)."""
-    w, x, y, z = q
-    inv = 1.0 / ops.sqrt(w * w + x * x + y * y + z * z)
-    inv = ops.where(w * ref[0] + x * ref[1] + y * ref[2] + z * ref[3] < 0, -inv, inv)
-    return (w * inv, x * inv, y * inv, z * inv)
+def units_like(qs: list[Quat], refs: list[Quat], ops: Any) -> list[Quat]:
+    """The quaternions ``qs`` normalised, each with the sign of its ``refs`` entry (``q`` and
+    ``-q`` are one rotation: keeping the starting quaternion's sign spares an animated solve
+    its sign flips)."""
+    sqrt, where, out = ops.sqrt, ops.where, []
+    for (w, x, y, z), (rw, rx, ry, rz) in zip(qs, refs, strict=True):
+        inv = 1.0 / sqrt(w * w + x * x + y * y + z * z)
+        inv = where(w * rw + x * rx + y * ry + z * rz < 0, -inv, inv)
+        out.append((w * inv, x * inv, y * inv, z * inv))
+    return out
 
 
 def axis_turn(axis: Vec, angle: Scalar, ops: Any) -> Quat:
@@ -366,7 +225,7 @@ class SerialChain:
     axes: tuple[Vec | None, ...]  # per variable: hinge axis (in the parent frame) or None
     reach: tuple[float, float, float]  # the effector's reach: far, near and rounding slack
 
-    @property
+    @cached_property  # fixed per chain, asked by every solve
     def free_balls(self) -> bool:
         """Every bone turns freely: nodes 0..n-2 are all ball joints (FABRIK's own case)."""
         return (self.variables == tuple(range(len(self.joints) - 1))
@@ -436,12 +295,12 @@ class SerialChain:
         u = scale(axis, 1.0 / ops.where(length > TINY, length, 1.0))
         rel = sub(target, root)
         off = cross(rel, u)
-        far, _, slack = self.reach
-        stretched = ops.both(length >= far - slack, dot(rel, u) >= length)
-        need = ops.both(ops.both(length > TINY, ops.sqrt(dot(off, off)) <= tol),
-                        ops.both(ops.dist(tip, target) >= tol, ops.invert(stretched)))
+        need = ops.both(length > TINY, ops.sqrt(dot(off, off)) <= tol)
         if not ops.any(need):  # the usual case: the target is off the chain's line
             return R, Q, P
+        far, _, slack = self.reach
+        stretched = ops.both(length >= far - slack, dot(rel, u) >= length)
+        need = ops.both(need, ops.both(ops.dist(tip, target) >= tol, ops.invert(stretched)))
         for p in P[1:-1]:
             off = cross(sub(p, root), u)
             need = ops.both(need, ops.sqrt(dot(off, off)) <= slack)
@@ -576,14 +435,14 @@ def solve_jacobian(
     R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
     e = sub(target, P[-1])
     err = ops.sqrt(dot(e, e))
-    history = History(ops.batch(err), tol, max_iter)
+    history = History(err, tol, max_iter, ops=ops)
     frames = [R] if record else []
     step_scale = 1.0
-    while history.active.any() and chain.variables:
+    while ops.any(history.active) and chain.variables:
         delta = increment(chain.columns(Q, P, base), e, method, inv_w2, damping, rcond, ops)
         big = reduce(ops.maximum, (ops.abs(d) for d in delta))
         k = ops.minimum(1.0, max_step / ops.maximum(big, 1e-300)) * step_scale
-        k = k * ops.flag(history.active)
+        k = k * history.active
         trial = chain.step(R, Q, base, [d * k for d in delta], ops)
         if limits:
             trial = chain.project(trial, limits, ops)
@@ -593,24 +452,26 @@ def solve_jacobian(
         worse = err_t > err
         step_scale = ops.where(worse, 0.5 * step_scale, ops.minimum(1.0, 2.0 * step_scale))
         R, Q, P, e, err = ops.select(worse, (R, Q, P, e, err), (trial, Q_t, P_t, e_t, err_t))
-        history.update(ops.batch(err))
+        history.update(err)
         if record:
             frames.append(R)
-    if not history.converged.all():
+    if not ops.all(history.converged):
         cols = np.array([np.broadcast_arrays(*c) for c in chain.columns(Q, P, base)])
-        history.singular = lost_rank(np.moveaxis(cols.reshape(len(cols), 3, -1), -1, 0), rcond)
+        history.singular = ops.flag(lost_rank(np.moveaxis(cols.reshape(len(cols), 3, -1), -1, 0),
+                                              rcond))
     return R, P, history, frames
 
 
 # --------------------------------------------------------------------------- FABRIK
-def follow(P: list[Vec], first: int, step: int, d: list[Scalar], fallback: list[Vec],
+def follow(P: list[Vec], first: int, step: int, d: list[Scalar], rest: list[Vec],
            ops: Any) -> list[Vec]:
     r"""Pull the points after ``P[first]`` (``step = +1``: towards the tip, ``-1``: towards the
     root) one by one back to their bone lengths:
     :math:`p_j \leftarrow p_i + d\,\widehat{(p_j - p_i)}`, with :math:`p_i` the point just
-    placed and :math:`d` the bone between them; where the two coincide, along ``fallback`` of
-    that bone (a unit vector). FABRIK spends its time here, so the update is written out
-    in components, once for both directions."""
+    placed and :math:`d` the bone between them; where the two coincide, along that bone's unit
+    ``rest`` direction (root to tip), turned the way the pass goes (``step`` times it).
+    FABRIK spends its time here, so the update is written out in components, once for both
+    directions."""
     P = list(P)
     sqrt, all_, where = ops.sqrt, ops.all, ops.where
     fx, fy, fz = P[first]
@@ -620,9 +481,9 @@ def follow(P: list[Vec], first: int, step: int, d: list[Scalar], fallback: list[
         tx, ty, tz = P[j]
         dx, dy, dz = tx - fx, ty - fy, tz - fz
         n = sqrt(dx * dx + dy * dy + dz * dz)
-        if not all_(n >= TINY):  # coinciding points: the bone's fallback direction
+        if not all_(n >= TINY):  # coinciding points: the bone's rest direction
             ok = n >= TINY
-            gx, gy, gz = fallback[bone]
+            gx, gy, gz = scale(rest[bone], step)
             dx, dy, dz, n = where(ok, dx, gx), where(ok, dy, gy), where(ok, dz, gz), \
                 where(ok, n, 1.0)
         k = d[bone] / n
@@ -632,23 +493,23 @@ def follow(P: list[Vec], first: int, step: int, d: list[Scalar], fallback: list[
     return P
 
 
-def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], back: list[Vec],
+def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], rest: list[Vec],
                   ops: Any) -> list[Vec]:
     r"""FABRIK's forward reaching: :math:`p_n \leftarrow t`, then
     :math:`p_i \leftarrow p_{i+1} + d_i\,\widehat{(p_i - p_{i+1})}` down to the root.
-    ``back`` are directions from joint ``i + 1`` to ``i`` to use where two joints coincide."""
+    ``rest`` are the unit bone directions (root to tip), reversed where two joints coincide."""
     P = list(P)
     P[-1] = target
-    return follow(P, len(P) - 1, -1, d, back, ops)
+    return follow(P, len(P) - 1, -1, d, rest, ops)
 
 
 def fabrik_pass(P: list[Vec], target: Vec, root: Vec, d: list[Scalar], rest: list[Vec],
-                back: list[Vec], ops: Any) -> list[Vec]:
+                ops: Any) -> list[Vec]:
     r"""One FABRIK iteration: forward reaching (:func:`reach_forward`), then backward
     reaching (:math:`p_0 \leftarrow b`, then :math:`p_{i+1} \leftarrow p_i +
-    d_i\,\widehat{(p_{i+1} - p_i)}`); ``rest`` and ``back`` are the unit bone directions
-    (root to tip and back) to use where two joints coincide."""
-    P = reach_forward(P, target, d, back, ops)
+    d_i\,\widehat{(p_{i+1} - p_i)}`); ``rest`` are the unit bone directions (root to tip)
+    to use where two joints coincide."""
+    P = reach_forward(P, target, d, rest, ops)
     P[0] = root
     return follow(P, 0, 1, d, rest, ops)
 
@@ -688,7 +549,6 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any
     iterations, error : per problem
     """
     d, rest = bone_directions(P, ops)
-    back = [scale(r, -1.0) for r in rest]
     root = P[0]
     to_t = sub(target, root)
     dist = ops.sqrt(dot(to_t, to_t))
@@ -706,13 +566,13 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Any
         if not ops.any(active):
             break
         if ops.all(active):  # every problem still running
-            P = fabrik_pass(P, target, root, d, rest, back, ops)
+            P = fabrik_pass(P, target, root, d, rest, ops)
             err = ops.dist(P[-1], target)
             its = its + 1
             active = err >= tol
         else:  # a batch, some problems done: iterate only those still running
             idx = np.flatnonzero(active)
-            Q, t = fabrik_pass(*ops.take((P, target, root, d, rest, back), idx), ops), \
+            Q, t = fabrik_pass(*ops.take((P, target, root, d, rest), idx), ops), \
                 ops.take(target, idx)
             err_q = ops.dist(Q[-1], t)
             P = ops.put(P, idx, Q)
@@ -758,7 +618,7 @@ def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target:
     Q, P = chain.forward(R, base, p0)
     R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, [], ops)
     e = sub(target, P[-1])
-    history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
+    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops)
     points: list | None = [] if record else None
     errors: list = []
     P_new, its, _ = fabrik_points(ops.copy(P), target, tol, max_iter, ops, points, errors)
@@ -768,11 +628,11 @@ def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target:
     # Residuals of the fitted poses (honest: what the returned rotations reach); without a
     # record, the points' errors stand for the iterations in between (the fit is exact).
     if not record:
-        history.residuals += [ops.batch(e) for e in errors[:-1]]
+        history.residuals += errors[:-1]
     for _, P in fitted if record else fitted[-1:]:
-        history.residuals.append(ops.batch(ops.dist(target, P[-1])))
-    history.iterations = np.asarray(ops.batch(its), dtype=int)
-    history.active[:] = False
+        history.residuals.append(ops.dist(target, P[-1]))
+    history.iterations = its
+    history.active = ops.full(its, False)
     R_new, P = fitted[-1]
     return R_new, P, history, [R] + [f for f, _ in fitted] if record else []
 
@@ -797,12 +657,11 @@ def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
     Q, P = chain.forward(R, base, p0)
     R, _, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
     d, rest = bone_directions(P, ops)
-    back = [scale(r, -1.0) for r in rest]
     e = sub(target, P[-1])
-    history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
+    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops)
     frames = [R] if record else []
-    while history.active.any() and chain.variables:
-        reached = reach_forward(P, target, d, back, ops)
+    while ops.any(history.active) and chain.variables:
+        reached = reach_forward(P, target, d, rest, ops)
         new, q, p, P_new = list(R), base, p0, []
         for i in range(n):  # backward reaching: forward kinematics, aiming every joint
             if i:
@@ -823,9 +682,8 @@ def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
                 new = chain.project(new, limits_of[i], ops)
             q = qmul(q, new[i])
         e_new = sub(target, P_new[-1])
-        run = ops.flag(history.active)
-        R, P, e = ops.select(run, (new, P_new, e_new), (R, P, e))
-        history.update(ops.batch(ops.sqrt(dot(e, e))))
+        R, P, e = ops.select(history.active, (new, P_new, e_new), (R, P, e))
+        history.update(ops.sqrt(dot(e, e)))
         if record:
             frames.append(R)
     return R, P, history, frames
@@ -849,9 +707,9 @@ def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Ve
     Q, P = chain.forward(R, base, p0)
     R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
     e = sub(target, P[-1])
-    history = History(ops.batch(ops.sqrt(dot(e, e))), tol, max_iter)
+    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops)
     frames = [R] if record else []
-    while history.active.any() and chain.variables:
+    while ops.any(history.active) and chain.variables:
         new, Q, P = list(R), list(Q), list(P)
         for v in order:
             parent, pivot = (Q[v - 1] if v else base), P[v]
@@ -865,10 +723,10 @@ def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Ve
                 P[j] = add(pivot, qrot(turn, sub(P[j], pivot)))
                 Q[j] = qmul(turn, Q[j])
             Q[v] = Qv
-        R = ops.select(ops.flag(history.active), new, R)
+        R = ops.select(history.active, new, R)
         Q, P = chain.forward(R, base, p0)
         e = sub(target, P[-1])
-        history.update(ops.batch(ops.sqrt(dot(e, e))))
+        history.update(ops.sqrt(dot(e, e)))
         if record:
             frames.append(R)
     return R, P, history, frames

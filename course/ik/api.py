@@ -17,16 +17,15 @@ from course.rotations._checks import as_array
 
 from . import ccd, fabrik, jacobian
 from ._chains import ChainModel, Problem, build_model
+from ._ops import ARRAYS, FLOATS
 from ._serial import (
-    ARRAYS,
-    FLOATS,
     SerialChain,
     serial_chain,
     solve_ccd,
     solve_fabrik,
     solve_fabrik_joints,
     solve_jacobian,
-    unit_like,
+    units_like,
 )
 from ._small import TINY, best_rotation, cross, dot, matvec, norm, orthonormalize
 from .result import History, IKResult, Target
@@ -176,13 +175,11 @@ def solve(
     max_iter = int(max_iter)
     if _FAST_PATH and serial is not None and method != "two_link":
         (j,) = pos_t
-        local_out, root_out, positions, history, unreachable, frames = _solve_serial(
+        return _result(*_solve_serial(
             skeleton, serial, model, local, root_pos, k, pos_t[j], B, batched, method, tol,
             max_iter, col_weight,
             serial.limits(*_limits(skeleton, model, limits)) if limits else [], record,
-            **options)
-        return _result(local_out, root_out, positions, history, unreachable, frames, tol,
-                       method, batched)
+            **options), method)
     hinge_limits, ball_limit = _limits(skeleton, model, limits)
 
     local_b = np.broadcast_to(local, (B, J, 4)).copy()
@@ -231,8 +228,12 @@ def solve(
         recorded = [(stacked[0][t * B:(t + 1) * B], stacked[2][t * B:(t + 1) * B])
                     for t in range(T)]
     unreachable = problem.unreachable() if len(model.effectors) else np.zeros(B, bool)
-    return _result(*pose, history, unreachable, recorded if record else None, tol, method,
-                   batched)
+    if not batched:  # one problem, solved as a batch of one
+        pose = [a[0] for a in pose]
+        recorded = [(q[0], p[0]) for q, p in recorded]
+        unreachable = unreachable[0]
+        history.unbatch()
+    return _result(*pose, history, unreachable, recorded if record else None, method)
 
 
 # The options each method takes, and the values they accept: (test, what it must be).
@@ -249,8 +250,11 @@ OPTIONS: dict[str, dict[str, tuple[Any, str]]] = {
 }
 
 
+_NUMBER = (int, float, np.integer, np.floating)  # a tuple: ``int | float`` is built per call
+
+
 def _is_number(x: Any) -> bool:
-    return isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool)
+    return isinstance(x, _NUMBER) and not isinstance(x, bool)
 
 
 def _check_options(method: str, options: Mapping[str, Any]) -> None:
@@ -268,30 +272,22 @@ def _check_options(method: str, options: Mapping[str, Any]) -> None:
 
 
 def _result(local: Array, root_pos: Array, positions: Array, history: History,
-            unreachable: Array, frames: list[tuple[Array, Array]] | None, tol: float,
-            method: str, batched: bool) -> IKResult:
-    """The :class:`IKResult` of batched (B, ...) arrays; ``frames`` are (local, positions)."""
-    residuals = np.stack(history.residuals) if batched else np.concatenate(history.residuals)
+            unreachable: Any, frames: list[tuple[Array, Array]] | None,
+            method: str) -> IKResult:
+    """The :class:`IKResult` of one problem (arrays without a batch axis, a history of floats)
+    or of a batch (arrays (B, ...)); ``frames`` are (local, positions)."""
     return IKResult(
-        local_rotations=_unbatch(local, batched),
-        root_position=_unbatch(root_pos, batched),
-        positions=_unbatch(positions, batched),
-        converged=_unbatch(history.error < tol, batched),
-        iterations=_unbatch(history.iterations, batched),
-        residuals=residuals,
-        reason=_unbatch(history.reasons(unreachable), batched),
+        local_rotations=local,
+        root_position=root_pos,
+        positions=positions,
+        converged=history.converged,
+        iterations=history.iterations,
+        residuals=np.array(history.residuals),
+        reason=history.reasons(unreachable),
         method=method,
-        frames=None if frames is None else [
-            {"positions": _unbatch(p, batched), "local_rotations": _unbatch(q, batched)}
-            for q, p in frames],
+        frames=None if frames is None else [{"positions": p, "local_rotations": q}
+                                            for q, p in frames],
     )
-
-
-def _unbatch(a: Any, batched: bool) -> Any:
-    if batched:
-        return a
-    a = a[0]
-    return a.item() if isinstance(a, np.generic) else a
 
 
 def _split_target(value: Any) -> tuple[Any, Any]:
@@ -466,28 +462,28 @@ def _solve_serial(
     col_weight: Array, limits: list[tuple], record: bool, damping: float | None = None,
     rcond: float = 1e-6, max_step: float = 0.5, tip_to_root: bool = True,
     max_angle: float | None = None,
-) -> tuple[Array, Array, Array, History, NDArray[np.bool_],
-           list[tuple[Array, Array]] | None]:
-    """CCD, FABRIK or a Jacobian method on a serial chain (:mod:`course.ik._serial`), one
-    problem in Python floats or a batch on component arrays. Returns local rotations, root
-    position and positions, all (B, ...), the history, whether each target is out of reach
-    and the recorded (local, positions) frames."""
+) -> tuple[Array, Array, Array, History, Any, list[tuple[Array, Array]] | None]:
+    """CCD, FABRIK or a Jacobian method on a serial chain (:mod:`course.ik._serial`): one
+    problem in Python floats (``local`` (J, 4), ``root_pos`` and ``target`` (3,)), or a batch
+    on component arrays. Returns local rotations, root position and positions (with a batch's
+    leading ``B``), the history, whether each target is out of reach and the recorded
+    (local, positions) frames."""
     ops = ARRAYS if batched else FLOATS
-    J = skeleton.n_joints
     joints = list(chain.joints)
-    local = local.reshape(1, J, 4) if B == 1 else np.broadcast_to(local, (B, J, 4))
-    root_pos = root_pos.reshape(1, 3) if B == 1 else np.broadcast_to(root_pos, (B, 3))
+    if batched:
+        local = np.broadcast_to(local, (B, skeleton.n_joints, 4))
+        root_pos = np.broadcast_to(root_pos, (B, 3))
     if k == 0:  # the world frame is held and joint 0 sits at the root position
         base, p0 = (1.0, 0.0, 0.0, 0.0), _components(root_pos, ops)
     else:
         positions, orientations = fk.forward_kinematics(skeleton.parents, skeleton.offsets,
                                                         local, root_pos)
-        base = _components(orientations[:, skeleton.parents[k]], ops)
-        p0 = _components(positions[:, k], ops)
+        base = _components(orientations[..., skeleton.parents[k], :], ops)
+        p0 = _components(positions[..., k, :], ops)
     if ops is FLOATS:
-        rows = local[0].tolist()
+        rows = local.tolist()
         start = [tuple(rows[j]) for j in joints]
-        target = tuple(target.reshape(3).tolist())
+        target = tuple(target.tolist())
     else:
         start = [_components(local[:, j], ops) for j in joints]
         target = _components(np.broadcast_to(target, (B, 3)), ops)
@@ -512,26 +508,26 @@ def _solve_serial(
             inv_w2=tuple((1.0 / col_weight**2).tolist()), damping=damping, rcond=rcond,
             max_step=max_step, limits=limits, record=record, ops=ops)
 
-    covers = chain.joints == tuple(range(J))  # a chain skeleton: its FK is the chain's
+    covers = chain.joints == tuple(range(skeleton.n_joints))  # a chain skeleton: its own FK
 
     def pose(R: list, P: list | None = None) -> tuple[Array, Array]:
         """Local rotations (unit, in the starting quaternions' signs) and positions of ``R``;
         ``P``, if given, are the chain's positions of ``R`` already computed."""
-        q = ops.stack([unit_like(q, r, ops) for q, r in zip(R, start, strict=True)], B)
+        q = ops.stack(units_like(R, start, ops), B)
         if covers:  # every joint is on the chain
             return q, ops.stack(chain.forward(R, base, p0)[1] if P is None else P, B)
         out = local.copy()
-        out[:, joints] = q
+        out[..., joints, :] = q
         return out, fk.forward_kinematics(skeleton.parents, skeleton.offsets, out, root_pos)[0]
 
     local_out, positions = pose(R, P)
     recorded = [pose(f) for f in frames] if record else None
-    unreachable = ops.batch(chain.unreachable(target, p0, ops))
+    unreachable = chain.unreachable(target, p0, ops)
     return local_out, root_pos.copy(), positions, history, unreachable, recorded
 
 
 def _components(a: Array, ops: Any) -> tuple:
-    """(B, c) -> c components: floats for one problem, contiguous (B,) rows for a batch."""
+    """(c,) -> c floats for one problem; (B, c) -> c contiguous (B,) rows for a batch."""
     if ops is FLOATS:
-        return tuple(a[0].tolist())
+        return tuple(a.tolist())
     return tuple(np.ascontiguousarray(a.T))

@@ -34,7 +34,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._chains import Problem
-from ._serial import ARRAYS, fabrik_points
+from ._ops import ARRAYS
+from ._serial import fabrik_points
 from ._small import TINY, norm
 from .result import History
 

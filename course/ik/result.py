@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from ._ops import ARRAYS, FLOATS
 
 Array = NDArray[np.float64]
 
@@ -72,33 +75,38 @@ class IKResult:
 
 
 class History:
-    """Per-problem convergence bookkeeping for a batch of ``B`` problems.
+    """Per-problem convergence bookkeeping for one problem or a batch of ``B``.
 
     ``update(err)`` records the largest effector error of every problem and returns the mask
-    of problems still running (not converged, not stalled, below ``max_iter``).
+    of problems still running (not converged, not stalled, below ``max_iter``). With ``ops``
+    :data:`~course.ik._ops.FLOATS` (one problem on the serial fast path) errors are floats and
+    flags bools, which spares a single solve a numpy call per entry; with
+    :data:`~course.ik._ops.ARRAYS` (the default) they are arrays (B,).
     """
 
     # A problem has stalled when its error (or the objective it minimises) fell by less than
     # this fraction of the tolerance over the last ``window`` iterations.
     window = 8
 
-    def __init__(self, err: Array, tol: float, max_iter: int, progress: Array | None = None):
+    def __init__(self, err: Any, tol: float, max_iter: int, progress: Any = None,
+                 ops: Any = ARRAYS):
         """``progress`` (B,), if given, is the starting objective the stall test then watches
         (see :meth:`update`)."""
-        self.tol, self.max_iter = tol, max_iter
-        self.residuals = [err.copy()]
-        self._progress: list[Array] = [] if progress is None else [progress.copy()]
-        self.iterations = np.zeros(err.shape, dtype=int)
-        self.stalled = np.zeros(err.shape, dtype=bool)
-        self.active = err >= tol if max_iter > 0 else self.stalled.copy()
+        self.tol, self.max_iter, self.ops = tol, max_iter, ops
+        self.residuals = [ops.copy(err)]
+        self._progress: list = [] if progress is None else [ops.copy(progress)]
+        self.iterations = ops.full(err, 0)
+        self.stalled = ops.full(err, False)
+        self.active = err >= tol if max_iter > 0 else ops.full(err, False)
         # Set by the Jacobian methods: the final Jacobian has lost rank.
-        self.singular = self.stalled.copy()
+        self.singular = ops.full(err, False)
 
-    def update(self, err: Array, progress: Array | None = None) -> Array:
+    def update(self, err: Any, progress: Any = None) -> Any:
         """Record ``err`` (B,); ``progress`` (B,), if given, is the objective the solver
         reduces (a length), which the stall test watches instead of ``err``."""
+        ops = self.ops
         prev = self.residuals[-1]
-        err = np.where(self.active, err, prev)
+        err = ops.where(self.active, err, prev)
         self.iterations += self.active
         self.residuals.append(err)
         watched = self.residuals
@@ -108,27 +116,33 @@ class History:
         if len(watched) > self.window:
             old, new = watched[-1 - self.window], watched[-1]
             self.stalled |= self.active & (old - new < 1e-3 * self.tol)
-        self.active = (err >= self.tol) & ~self.stalled & (self.iterations < self.max_iter)
+        self.active = ((err >= self.tol) & ops.invert(self.stalled)
+                       & (self.iterations < self.max_iter))
         return self.active
 
+    def unbatch(self) -> None:
+        """Turn the bookkeeping of a batch of one into that problem's own (floats, ints and
+        bools, as with :data:`~course.ik._ops.FLOATS`)."""
+        self.residuals = [r.item() for r in self.residuals]
+        self._progress = [p.item() for p in self._progress]
+        self.iterations, self.stalled, self.active, self.singular = (
+            a.item() for a in (self.iterations, self.stalled, self.active, self.singular))
+        self.ops = FLOATS
+
     @property
-    def error(self) -> Array:
+    def error(self) -> Any:
         return self.residuals[-1]
 
     @property
-    def converged(self) -> Array:
+    def converged(self) -> Any:
         return self.error < self.tol
 
-    def reasons(self, unreachable: Array) -> NDArray[np.str_]:
-        """Why each problem stopped: ``""`` converged, else the most informative reason."""
-        converged = self.converged
-        if converged.all():
-            return np.zeros(converged.shape, dtype="<U14")  # all ""
-        out = np.full(converged.shape, "max_iterations", dtype="<U14")
-        out[self.stalled] = "stalled"
+    def reasons(self, unreachable: Any) -> Any:
+        """Why each problem stopped: ``""`` converged, else the most informative reason
+        (one problem: a str; a batch: an array of str)."""
+        where = self.ops.where
         # Singular only where the solve stalled on a lost-rank Jacobian: one that merely ran
         # out of iterations was still making progress, whatever its last Jacobian.
-        out[self.stalled & self.singular] = "singular"
-        out[unreachable & ~converged] = "unreachable"
-        out[converged] = ""
-        return out
+        stopped = where(self.stalled, where(self.singular, "singular", "stalled"),
+                        "max_iterations")
+        return where(self.converged, "", where(unreachable, "unreachable", stopped))
