@@ -199,7 +199,7 @@ class SlerpExplorer(Control):
         self.widget = widgets.VBox([self.scene.widget(), _side_by_side(left, self.arc_image)])
         for name, s in self.sliders.items():
             _on_value(s, self._changed_t if name == "t" else self._changed_ends)
-        self._changed_ends()
+        self._show()
 
     def _ends(self) -> tuple[Array, Array]:
         from course.rotations import quat_from_euler
@@ -209,14 +209,18 @@ class SlerpExplorer(Control):
 
     def _changed_ends(self, _change: Any = None) -> None:
         self.q0, self.q1 = self._ends()
-        self.arc.set_rotations(self.q0, self.q1)
-        self._changed_t()
+        self.arc.set_rotations(self.q0, self.q1)  # drawn at the arc's t, the slider's
+        self._show()
 
     def _changed_t(self, _change: Any = None) -> None:
+        self.arc.set_t(self.sliders["t"].value)
+        self._show()
+
+    def _show(self) -> None:
+        """The arc's picture, the three frames and the table, for the current ends and t."""
         from course.rotations import lerp, matrix_from_quat, nlerp, quat_angle, slerp
 
         t = self.sliders["t"].value
-        self.arc.set_t(t)
         self.arc_image.value = self.arc.png()
         q1 = self.q1 if np.dot(self.q0, self.q1) >= 0 else -self.q1  # same hemisphere as q0
         q = {"LERP": lerp(self.q0, q1, t), "NLERP": nlerp(self.q0, q1, t),
@@ -677,9 +681,13 @@ class FullBodyIK(Control):
         name = self.sliders["edit"].value
         if self._editing or name is None:
             return
-        self.targets[name] = self.root_position + np.array([self.sliders[c].value for c in "xyz"])
+        self._take_target(name)
         self.scene.move_target_handle(self.targets[name])
         self.solve()
+
+    def _take_target(self, name: str) -> None:
+        """The edited effector's target from the x/y/z sliders (relative to the root)."""
+        self.targets[name] = self.root_position + np.array([self.sliders[c].value for c in "xyz"])
 
     def _dragged(self, position: Array) -> None:
         """The handle was dragged: the edited effector's target (and its sliders) follow."""
@@ -691,7 +699,7 @@ class FullBodyIK(Control):
             _set_sliders(self.sliders, position - self.root_position)
         finally:
             self._editing = False
-        self.targets[name] = self.root_position + np.array([self.sliders[c].value for c in "xyz"])
+        self._take_target(name)
         self.solve()
 
     def solve(self) -> None:
