@@ -40,20 +40,22 @@ $(STAMP): pyproject.toml
 	@$(PY) -m pip install --quiet -e '.[dev]' >> $(VENV)/install.log 2>&1 || (cat $(VENV)/install.log; exit 1)
 	@touch $@
 
-# pip's VTK wheel needs libGL.so.1 and libEGL.so.1; a bare Debian lacks them. When either is
-# missing, install both when we can (root with apt-get), otherwise say what is missing.
+# pip's VTK wheel needs libGL.so.1 and libEGL.so.1; a bare Debian lacks them. The grader's
+# strongest sandbox needs bubblewrap (bwrap) and libseccomp. When any is missing, install them
+# when we can (root with apt-get), otherwise say what is missing.
 sysdeps:
 	@if command -v ldconfig >/dev/null 2>&1; then \
 	  missing=""; \
-	  for lib in libGL.so.1 libEGL.so.1; do \
-	    ldconfig -p | awk '{print $$1}' | grep -qxF "$$lib" || missing="$$missing $$lib"; \
+	  for lib in libGL.so.1:libgl1 libEGL.so.1:libegl1 libseccomp.so.2:libseccomp2; do \
+	    ldconfig -p | awk '{print $$1}' | grep -qxF "$${lib%%:*}" || missing="$$missing $${lib#*:}"; \
 	  done; \
+	  command -v bwrap >/dev/null 2>&1 || missing="$$missing bubblewrap"; \
 	  if [ -n "$$missing" ]; then \
 	    if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-	      echo "Installing libgl1 libegl1 for off-screen 3D rendering (missing:$$missing)..."; \
-	      apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libgl1 libegl1 >/dev/null; \
+	      echo "Installing$$missing (3D rendering off screen, the grader's sandbox)..."; \
+	      apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing >/dev/null; \
 	    else \
-	      echo "warning:$$missing not found; 3D views need: apt-get install libgl1 libegl1"; \
+	      echo "warning: missing$$missing; apt-get install$$missing (3D views, the grader's sandbox)"; \
 	    fi; \
 	  fi; \
 	fi

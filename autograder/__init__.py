@@ -16,6 +16,7 @@ comparisons and scores are computed here. An assignment is a spec module plus da
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from .runner import Result
@@ -49,9 +50,10 @@ def check(assignment: str, submission: str | Path | None = None, *, seed: str | 
     """
     from .assignments import load
     from .runner import default_submission, run, seed_from_env
+    from .submission import printable
 
     spec = load(assignment)
     path = Path(submission) if submission is not None else default_submission(spec)
-    if not path.exists():
-        raise ValueError(f"submission: {path} does not exist")
+    if not os.path.lexists(path):  # a link (even to nothing) is refused in the report
+        raise ValueError(f"submission: {printable(path)} does not exist")
     return run(spec, path, seed_from_env(seed), limits, isolation)

@@ -9,9 +9,9 @@ directory (see :mod:`autograder.sandbox`). Before the submission is loaded it
 1. moves the grader's pipes off its standard input and output (requests come on stdin,
    frames go to stdout): descriptor 1 then points at the log like descriptor 2, and 0 at
    the null device, so a ``print`` never reaches the grader and ``input()`` reads nothing;
-2. on POSIX levels, lowers its own CPU-time, address-space and file-size limits (soft =
-   hard, so the submission cannot raise them again); at the ``"portable"`` level (Windows)
-   it sets none and imports no POSIX-only module;
+2. on POSIX levels, lowers its own CPU-time, address-space, file-size, descriptor and
+   thread limits (hard limits, so the submission cannot raise them again); at the
+   ``"portable"`` level (Windows) it sets none and imports no POSIX-only module;
 3. keeps ``ctypes`` from loading at all (numpy would import it, and ctypes reads any
    address in memory without raising an audit event), imports numpy from the one directory
    the grader names, then drops site-packages from ``sys.path`` (so ``course``, ``scipy``
@@ -43,17 +43,23 @@ import traceback
 import types
 from collections.abc import Callable
 
-# Standard-library modules a submission may not load: processes, sockets, native code,
-# limits, and introspection that could reach into this script. (Other modules import
-# ``signal``, ``gc``, ``shutil`` and ``urllib.parse``, so they load; what they could do that
-# matters is refused by audit event, and the network needs ``socket``. numpy.testing imports
-# ``subprocess``, so it does not load.)
-BLOCKED_STDLIB = frozenset({
-    "subprocess", "_posixsubprocess", "multiprocessing", "_multiprocessing", "concurrent",
-    "socket", "_socket", "ssl", "_ssl", "http", "ftplib", "smtplib", "asyncio",
-    "ctypes", "_ctypes", "pty", "resource", "inspect", "importlib", "pickle", "_pickle",
-    "marshal", "_winapi", "_overlapped", "winreg", "msvcrt", "winsound",
-})
+# The standard-library modules a submission may import (numpy comes from the assignment):
+# computation, text and data, and what those import themselves. Everything else is refused
+# with a message that says so: processes, sockets, native code (ctypes, cffi), other
+# interpreters (tkinter's Tcl, subinterpreters, code/pdb) and introspection that could reach
+# into this script. Modules numpy loaded before the hook stay in ``sys.modules``.
+ALLOWED_STDLIB = frozenset("""
+    __future__ abc argparse array ast base64 binascii bisect builtins bz2 calendar cmath codecs
+    collections colorsys contextlib contextvars copy copyreg csv dataclasses datetime decimal
+    difflib dis enum errno fnmatch fractions functools gc genericpath gettext glob graphlib
+    hashlib heapq hmac io itertools json keyword linecache locale lzma math numbers ntpath
+    opcode operator os pathlib posixpath pprint queue random re reprlib secrets shutil signal
+    sre_compile sre_constants sre_parse stat statistics string struct sys tempfile textwrap
+    threading time timeit token tokenize traceback types typing unicodedata unittest uuid
+    warnings weakref zlib
+    _bisect _blake2 _bz2 _compression _csv _decimal _hashlib _heapq _json _locale _lzma _queue
+    _random _sha512 _statistics _string _uuid
+""".split())
 # Audit events refused outright: new processes, signals, network, native code, gc walks,
 # tracing, limits, the working directory and symbolic links (both would let a path checked
 # here mean another file by the time the kernel opens it). sys._getframe stays allowed
@@ -130,7 +136,10 @@ def main() -> None:
 
 def _take_pipes() -> tuple[int, int]:
     """The grader's request and result pipes, moved off descriptors 0 and 1 (which then read
-    the null device and write to the log, as descriptor 2 does)."""
+    the null device and write to the log, as descriptor 2 does); on POSIX every other
+    inherited descriptor is closed first."""
+    if os.name == "posix":
+        os.closerange(3, 1 << 16)
     req, res = os.dup(0), os.dup(1)
     null = os.open(os.devnull, os.O_RDONLY | getattr(os, "O_BINARY", 0))
     os.dup2(null, 0)
@@ -143,10 +152,17 @@ def _limit(limits: dict) -> None:
     import resource  # only asked for on POSIX systems
 
     cpu, mem = int(limits["cpu_seconds"]), int(limits["memory_mb"]) << 20
-    for limit, value in ((resource.RLIMIT_CPU, cpu), (resource.RLIMIT_AS, mem),
-                         (resource.RLIMIT_FSIZE, 16 << 20), (resource.RLIMIT_CORE, 0)):
+    wanted = [(resource.RLIMIT_CPU, cpu), (resource.RLIMIT_AS, mem),
+              (resource.RLIMIT_FSIZE, int(limits["file_mb"]) << 20), (resource.RLIMIT_CORE, 0),
+              (resource.RLIMIT_NOFILE, 64)]
+    if limits.get("tasks"):  # threads and processes of this user (see sandbox.Limits)
+        wanted.append((resource.RLIMIT_NPROC, int(limits["tasks"])))
+    for limit, value in wanted:
+        # CPU: SIGXCPU at the soft limit tells "out of CPU time" even where the grader cannot
+        # read the child's CPU time (bubblewrap's processes stand between); SIGKILL 1 s later.
+        hard = value + 1 if limit == resource.RLIMIT_CPU else value
         try:
-            resource.setrlimit(limit, (value, value))
+            resource.setrlimit(limit, (value, hard))
         except (ValueError, OSError):  # macOS refuses RLIMIT_AS; the wall clock still holds
             pass
     del sys.modules["resource"]  # a submission importing it again meets the audit hook
@@ -163,7 +179,7 @@ def _load_module(name: str, path: str) -> types.ModuleType:
 
 
 def _allowed_modules(extra: list[str]) -> frozenset[str]:
-    return frozenset(sys.stdlib_module_names - BLOCKED_STDLIB) | frozenset(extra)
+    return ALLOWED_STDLIB | frozenset(extra)
 
 
 def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import os
+import stat
 import sys
 import time
 from pathlib import Path
@@ -10,7 +12,8 @@ from pathlib import Path
 from .assignments import KEYS, load
 from .grading import collect, grade
 from .runner import default_submission, run, seed_from_env
-from .sandbox import ISOLATION_NOTES, LEVELS, level_for
+from .sandbox import LEVELS, level_for, weaker_warning
+from .submission import printable
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -43,8 +46,15 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(str(exc))
     if args.command == "check":
         path = args.submission or default_submission(spec)
-        if not path.exists():
-            parser.error(f"submission: {path} does not exist")
+        try:
+            mode = os.lstat(path).st_mode  # a link or pipe is refused in the report
+        except OSError as exc:
+            parser.error(f"submission: {printable(path)} "
+                         + ("does not exist" if isinstance(exc, FileNotFoundError)
+                            else f"cannot be read ({exc.strerror})"))
+        if stat.S_ISDIR(mode):
+            parser.error(f"submission: {printable(path)} is a folder: give a .py or .ipynb "
+                         "file")
         result = run(spec, path, seed, level=level)
         print(result)
         return 0 if result.score >= result.max_score else 1
@@ -57,14 +67,22 @@ def main(argv: list[str] | None = None) -> int:
     if not seed:
         print("warning: no --seed or $AUTOGRADER_SEED: grading the visible tests only",
               file=sys.stderr)
-    if level != "namespaces":
-        print(f"warning: isolation is weaker on this machine ({level}): "
-              f"{ISOLATION_NOTES[level].strip('()')} Grade on Linux with user namespaces "
-              "for a private file system per submission.", file=sys.stderr)
+    warning = weaker_warning(level)
+    if warning:
+        print(warning, file=sys.stderr)
+    try:
+        args.out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        parser.error(f"--out: cannot make the folder {printable(args.out)} ({exc.strerror})")
     start = time.monotonic()
-    rows = grade(spec, submissions, args.out, jobs=args.jobs, seed=seed, level=level)
+    try:
+        rows = grade(spec, submissions, args.out, jobs=args.jobs, seed=seed, level=level)
+    except OSError as exc:  # grades.csv cannot be written
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
     mean = sum(r["score"] for r in rows) / len(rows)
     print(f"graded {len(rows)} submissions in {time.monotonic() - start:.1f} s; mean score "
-          f"{mean:.2f} / {rows[0]['max_score']:g}; results in {args.out}/grades.csv",
+          f"{mean:.2f} / {rows[0]['max_score']:g}; results in "
+          f"{printable(args.out / 'grades.csv')}",
           file=sys.stderr)
     return 0

@@ -3,101 +3,285 @@
 Each submission runs in its own sandboxed child, so threads are enough here: the
 grading process only sends inputs, compares arrays and writes files. A submission that
 breaks anything only loses its own points; the batch always finishes.
+
+File names, links and folders come from students too. Folders are searched without
+following links, to a bounded depth and number of entries; a link, pipe or device where a
+submission should be is refused when read (:func:`autograder.submission.read_regular`),
+with a row saying so. Each submission's name becomes a folder of the output: it is made
+safe (:func:`safe_name`) and unique, and every file written is proven inside ``out``.
 """
 
 from __future__ import annotations
 
+import itertools
 import json
+import os
+import re
+import stat
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TextIO
 
-from .report import csv_header, csv_row, gradescope, write_csv
+from .report import create, csv_header, csv_row, gradescope, write_csv
 from .runner import Result, TestResult, prepare, run
 from .sandbox import DEFAULT_LIMITS, Limits, level_for
 from .spec import Assignment
+from .submission import printable
 
 SUFFIXES = (".py", ".ipynb")
+MAX_DEPTH = 32  # folder levels searched inside a student's folder
+MAX_ENTRIES = 2000  # files and folders looked at inside a student's folder, in all
+MAX_LISTED = 100_000  # entries of a folder of submissions
+MAX_NAME_BYTES = 200  # of a name, as UTF-8; with "-N" it stays a valid file name everywhere
+RESERVED = frozenset({"grades.csv"})  # written beside the submissions' folders
+JUNK = frozenset({"__MACOSX", "__pycache__"})  # an archiver's or Python's, not the student's
+WINDOWS_DEVICES = frozenset({"CON", "PRN", "AUX", "NUL", *(f"COM{i}" for i in range(1, 10)),
+                             *(f"LPT{i}" for i in range(1, 10))})
 
 
-def collect(paths: list[Path], template: str) -> list[tuple[str, Path]]:
-    """``(name, file)`` per submission: files as given; in a directory, its ``.py`` and
+@dataclass(frozen=True)
+class Submission:
+    """A submission: its name (its folder in the output), its file, and why it cannot be
+    graded if that was found while collecting (several candidate files, a search cut
+    short); then ``path`` is the student's folder."""
+
+    name: str
+    path: Path
+    refused: str = ""
+
+
+def collect(paths: list[Path], template: str) -> list[Submission]:
+    """The submissions in ``paths``: files as given; in a directory, its ``.py`` and
     ``.ipynb`` files (named by their stem) and its subdirectories holding the template or
-    a single such file (named by the subdirectory, as in a Gradescope or LMS export)."""
-    found: list[tuple[str, Path]] = []
+    a single such file (named by the subdirectory, as in a Gradescope or LMS export).
+
+    No link is followed into and no file read here: a link or special file given, or where
+    a file or a student's folder would be, is a submission that :func:`grade` refuses with
+    a reason.
+    Names are made safe and unique (:func:`unique`). A ``ValueError`` says which of
+    ``paths`` does not exist or cannot be listed.
+    """
+    found: list[Submission] = []
     for p in paths:
-        if p.is_file():
-            found.append((p.stem, p))
-        elif p.is_dir():
-            for child in sorted(p.iterdir()):
-                if child.is_file() and child.suffix in SUFFIXES:
-                    found.append((child.stem, child))
-                elif child.is_dir():
-                    inner = _one_submission(child, template)
-                    if inner:
-                        found.append((child.name, inner))
+        try:
+            mode = os.lstat(p).st_mode
+        except OSError as exc:
+            raise ValueError(f"submissions: {printable(p)} "
+                             + ("does not exist" if isinstance(exc, FileNotFoundError)
+                                else f"cannot be read ({exc.strerror})")) from None
+        if stat.S_ISDIR(mode):
+            found += _in_folder(p, template)
         else:
-            raise ValueError(f"submissions: {p} does not exist")
-    names: dict[str, int] = {}
-    unique = []
-    for name, path in found:
-        names[name] = names.get(name, 0) + 1
-        unique.append((name if names[name] == 1 else f"{name}-{names[name]}", path))
-    return unique
+            found.append(Submission(p.stem, p))
+    return unique(found)
 
 
-def _one_submission(folder: Path, template: str) -> Path | None:
+def _in_folder(folder: Path, template: str) -> list[Submission]:
+    try:
+        with os.scandir(folder) as it:
+            entries = sorted(itertools.islice(it, MAX_LISTED + 1), key=lambda e: e.name)
+    except OSError as exc:
+        raise ValueError(f"submissions: {printable(folder)} cannot be listed "
+                         f"({exc.strerror})") from None
+    if len(entries) > MAX_LISTED:
+        raise ValueError(f"submissions: {printable(folder)} has more than {MAX_LISTED} "
+                         "entries: give its subfolders separately")
+    found = []
+    for e in entries:
+        path = Path(e.path)
+        if _is_dir(e):
+            inner = _one_submission(path, template)
+            if inner:
+                found.append(inner)
+        elif path.suffix in SUFFIXES:  # a link, pipe or socket too: refused when read
+            found.append(Submission(path.stem, path))
+        elif e.is_symlink() and os.path.isdir(path):  # a student's folder as a link
+            found.append(Submission(e.name, path))
+    return found
+
+
+def _is_dir(entry: os.DirEntry) -> bool:
+    try:
+        return entry.is_dir(follow_symlinks=False)
+    except OSError:
+        return False
+
+
+def _one_submission(folder: Path, template: str) -> Submission | None:
+    """A student's folder: its template file (whatever that is: a link there is refused,
+    not passed over), else its only ``.py``/``.ipynb`` file; a refusal if it has several
+    or could not be searched to the end; None if it has none."""
     stem = Path(template).stem
     for suffix in SUFFIXES:
-        if (folder / f"{stem}{suffix}").is_file():
-            return folder / f"{stem}{suffix}"
-    files = [f for f in folder.rglob("*") if f.is_file() and f.suffix in SUFFIXES]
-    return files[0] if len(files) == 1 else None
+        if os.path.lexists(folder / f"{stem}{suffix}"):
+            return Submission(folder.name, folder / f"{stem}{suffix}")
+    files, cut = _search(folder)
+    shown = printable(folder)
+    if cut:
+        return Submission(folder.name, folder, f"{shown} has no {template} and could not be "
+                                               f"searched for one: {cut}")
+    if len(files) > 1:
+        some = ", ".join(printable(f.relative_to(folder)) for f in files[:3])
+        more = f" and {len(files) - 3} more" if len(files) > 3 else ""
+        return Submission(folder.name, folder, f"{shown} has no {template} but {len(files)} "
+                                               f".py/.ipynb files ({some}{more}): cannot tell "
+                                               "which one to grade")
+    return Submission(folder.name, files[0]) if files else None
 
 
-def grade(assignment: Assignment, submissions: list[tuple[str, Path]], out: Path, *,
-          jobs: int = 1, seed: str | None = None, limits: Limits = DEFAULT_LIMITS,
+def _search(folder: Path) -> tuple[list[Path], str]:
+    """The ``.py``/``.ipynb`` entries below ``folder`` (hidden ones and links to folders
+    left out), and why the search stopped short if it did. Iterative, never following a
+    link, at most :data:`MAX_DEPTH` levels and :data:`MAX_ENTRIES` entries."""
+    found: list[Path] = []
+    stack, seen = [(folder, 1)], 0
+    while stack:
+        here, depth = stack.pop()
+        try:
+            with os.scandir(here) as it:
+                entries = sorted(itertools.islice(it, MAX_ENTRIES - seen + 1),
+                                 key=lambda e: e.name)
+        except OSError as exc:
+            return found, f"a folder in it cannot be read ({exc.strerror})"
+        seen += len(entries)
+        if seen > MAX_ENTRIES:
+            return found, f"it holds more than {MAX_ENTRIES} files and folders"
+        for e in reversed(entries):  # popped in name order
+            if e.name.startswith(".") or e.name in JUNK:
+                continue
+            if _is_dir(e):
+                if depth >= MAX_DEPTH:
+                    return found, f"its folders nest deeper than {MAX_DEPTH} levels"
+                stack.append((Path(e.path), depth + 1))
+            elif Path(e.path).suffix in SUFFIXES:
+                found.append(Path(e.path))
+    return sorted(found), ""
+
+
+def safe_name(raw: str) -> str:
+    """``raw`` (a file's stem or a folder's name) as a name that is one plain folder inside
+    the output on every system, and a harmless line in a terminal: control and invisible
+    characters removed, bytes that are not UTF-8 shown as ``_xe9``, path separators and
+    characters Windows forbids as ``_``, no leading dot, no ``..``, at most
+    :data:`MAX_NAME_BYTES` bytes; ``"submission"`` if nothing is left."""
+    out = []
+    for ch in os.fsdecode(raw):
+        code = ord(ch)
+        if 0xDC80 <= code <= 0xDCFF:  # os.fsdecode's stand-in for a byte that is not UTF-8
+            out.append(f"_x{code - 0xDC00:02x}")
+        elif ch in '/\\<>:"|?*':
+            out.append("_")
+        elif ch.isprintable():  # drops control, format (U+202E), separator and surrogate
+            out.append(ch)
+    name = re.sub(r"\.{2,}", "_", "".join(out)).strip(". ")
+    while len(name.encode()) > MAX_NAME_BYTES:
+        name = name[:-1].rstrip(". ")
+    if name.partition(".")[0].upper() in WINDOWS_DEVICES:
+        name = "_" + name
+    return name or "submission"
+
+
+def unique(submissions: list[Submission]) -> list[Submission]:
+    """``submissions`` with safe names (:func:`safe_name`), unique without regard to case
+    (one folder on Windows and macOS): a name taken again gets the first ``-2``, ``-3``, ...
+    that no other submission has, so a real ``dup-2`` keeps its own. Already unique safe
+    names are kept as they are."""
+    bases = [safe_name(s.name) for s in submissions]
+    taken = {b.casefold() for b in bases} | RESERVED
+    used: set[str] = set()
+    out = []
+    for s, base in zip(submissions, bases, strict=True):
+        name = base
+        if base.casefold() in used or base.casefold() in RESERVED:
+            n = 2
+            while f"{base}-{n}".casefold() in taken:
+                n += 1
+            name = f"{base}-{n}"
+            taken.add(name.casefold())
+        used.add(name.casefold())
+        out.append(replace(s, name=name))
+    return out
+
+
+def inside(root: Path, name: str) -> Path:
+    """``root / name``, proven to be an entry of ``root`` (a resolved folder) once links
+    are resolved; a ``ValueError`` otherwise."""
+    path = root / name
+    if name in ("", ".", "..") or path.parent != root or path.resolve().parent != root:
+        raise ValueError(f"{printable(path)} is not inside {printable(root)}")
+    return path
+
+
+def grade(assignment: Assignment, submissions: list[Submission | tuple[str, Path]], out: Path,
+          *, jobs: int = 1, seed: str | None = None, limits: Limits = DEFAULT_LIMITS,
           progress: TextIO | None = sys.stderr, level: str | None = None) -> list[dict]:
     """Grade every submission; write ``out/<name>/results.json`` and ``out/grades.csv``.
-    ``level``: the sandbox's isolation (default: the strongest here)."""
+    ``level``: the sandbox's isolation (default: the strongest here). Names are made safe
+    and unique again (:func:`unique`: unchanged for :func:`collect`'s); a submission that
+    cannot be read gets score 0 and the reason, like any refused one. Nothing is written
+    through a link in ``out``: a ``results.json`` is then skipped with a warning, and
+    ``grades.csv`` is an ``OSError``."""
+    subs = unique([s if isinstance(s, Submission) else Submission(*s) for s in submissions])
     out.mkdir(parents=True, exist_ok=True)
+    root = out.resolve()
     prepare(assignment, seed)  # once, before the threads start
     level = level_for(level)  # probed once, too
-    bar = Progress(len(submissions), progress)
+    bar = Progress(len(subs), progress)
     rows: dict[str, dict] = {}
     header = None
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-        futures = {pool.submit(_grade_one, assignment, path, seed, limits, level): (name, path)
-                   for name, path in submissions}
+        futures = {pool.submit(_grade_one, assignment, s, seed, limits, level): s
+                   for s in subs}
         for future in as_completed(futures):
-            name, path = futures[future]
+            s = futures[future]
             result = future.result()
-            folder = out / name
-            folder.mkdir(exist_ok=True)
-            (folder / "results.json").write_text(json.dumps(gradescope(result), indent=1))
-            rows[name] = csv_row(name, result)
+            _write_results(root, s.name, gradescope(result))
+            rows[s.name] = csv_row(s.name, result)
             header = header or csv_header(result)
-            bar.step(name, result)
+            bar.step(s.name, result)
     bar.close()
-    ordered = [rows[name] for name, _ in submissions]
+    ordered = [rows[s.name] for s in subs]
     if header:
-        write_csv(out / "grades.csv", header, ordered)
+        try:
+            write_csv(inside(root, "grades.csv"), header, ordered)
+        except ValueError as exc:  # a link planted in --out
+            raise OSError(f"grades.csv not written: {exc}") from None
     return ordered
 
 
-def _grade_one(assignment: Assignment, path: Path, seed: str | None, limits: Limits,
-               level: str) -> Result:
+def _write_results(root: Path, name: str, results: dict) -> None:
+    """``root/name/results.json``, if both are really there (not links out of ``root``)."""
     try:
-        return run(assignment, path, seed, limits, level)
+        folder = inside(root, name)
+        folder.mkdir(exist_ok=True)
+        with create(inside(folder, "results.json")) as f:
+            f.write(json.dumps(results, indent=1))
+    except (OSError, ValueError) as exc:  # a link planted in --out, say: write nothing there
+        print(f"warning: results of {name} not written: {exc}", file=sys.stderr)
+
+
+def _grade_one(assignment: Assignment, s: Submission, seed: str | None, limits: Limits,
+               level: str) -> Result:
+    if s.refused:
+        return _not_run(assignment, s.path, seed, level, s.refused,
+                        "not run: the submission was refused (see above)")
+    try:
+        return run(assignment, s.path, seed, limits, level)
     except Exception as exc:  # a bug of ours must not stop the class's grading
-        tests = [TestResult(p.test, assignment.function(p.test.function),
-                            note="not run: the grader failed on this submission")
-                 for p in prepare(assignment, seed)]
-        return Result(assignment, path, tests, seed is not None, isolation=level,
-                      problems=[f"the grader failed ({type(exc).__name__}: {exc}); "
-                                "please report this"])
+        return _not_run(assignment, s.path, seed, level,
+                        f"the grader failed ({type(exc).__name__}: {exc}); please report this",
+                        "not run: the grader failed on this submission")
+
+
+def _not_run(assignment: Assignment, path: Path, seed: str | None, level: str, problem: str,
+             note: str) -> Result:
+    tests = [TestResult(p.test, assignment.function(p.test.function), note=note)
+             for p in prepare(assignment, seed)]
+    return Result(assignment, path, tests, seed is not None, isolation=level,
+                  problems=[problem])
 
 
 class Progress:

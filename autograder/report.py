@@ -3,24 +3,57 @@
 All of them say the same things, shortly: per test, the points, how many cases passed, the
 known mistake the failures match (with the lecture's formula), and the first failing case
 with its inputs, what came back and what was expected.
+
+Much of what they say comes from the submission (file names, messages of its errors, notes
+on its notebook), so every string is bounded (:func:`bounded`), and CSV cells that a
+spreadsheet would run as a formula are quoted (:func:`csv_cell`).
 """
 
 from __future__ import annotations
 
 import csv
 import html as _html
+import os
+import stat
 import textwrap
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from .runner import Result, TestResult, describe_args
 from .sandbox import ISOLATION_NOTES
+from .submission import printable
 
 BADGE = {"passed": "PASS", "partial": "PART", "failed": "FAIL", "not_implemented": "TODO",
          "not_run": "----"}
 STOPPED = ("timeout", "crash")  # fatal outcomes that concern one case (garbage voids a test)
 COLOURS = {"passed": "#1a7f37", "partial": "#b35900", "failed": "#cf222e",
            "not_implemented": "#6e7781", "not_run": "#6e7781"}
+MAX_LINE = 2000  # characters of one problem, note or reason: far more than ours ever say
+MAX_FIELD = 20_000  # characters of one field of results.json (a test's output, the header)
+FORMULA = ("=", "+", "-", "@", "\t", "\r")  # what starts a formula in a spreadsheet (OWASP)
+# O_NOFOLLOW: a link planted where a result goes is not written through; O_NONBLOCK: a FIFO
+# there fails at once instead of blocking until someone reads it; O_BINARY: Windows writes
+# the newlines it is given.
+WRITE_FLAGS = (os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_NOFOLLOW", 0)
+               | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+
+
+def bounded(text: str, limit: int = MAX_LINE) -> str:
+    """``text`` cut to ``limit`` characters, saying how many were cut; characters that
+    cannot be written as UTF-8 (lone surrogates) escaped."""
+    if len(text) > limit:
+        text = f"{text[:limit]} [... {len(text) - limit} characters cut]"
+    return _utf8(text)
+
+
+def _utf8(text: str) -> str:
+    """``text`` with lone surrogates (which a forged JSON message can hold) escaped: print()
+    and UTF-8 files would fail on them."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")
+    return text
 
 
 def _points(x: float) -> str:
@@ -64,12 +97,12 @@ def test_lines(t: TestResult) -> list[str]:
 
 def header(result: Result) -> list[str]:
     a = result.assignment
-    lines = [f"{a.key} · {a.title} · {result.submission}"]
+    lines = [f"{a.key} · {a.title} · {printable(result.submission)}"]
     if not result.hidden_run:
         lines.append("Visible tests only: hidden tests run when your instructor grades "
                      "(with a secret seed).")
-    lines += [f"Refused: {p}" for p in result.problems]
-    lines += [f"Note: {n}" for n in result.notes]
+    lines += [f"Refused: {bounded(p)}" for p in result.problems]
+    lines += [f"Note: {bounded(n)}" for n in result.notes]
     if ISOLATION_NOTES.get(result.isolation):
         lines.append(ISOLATION_NOTES[result.isolation])
     return lines
@@ -104,7 +137,7 @@ def text(result: Result, width: int = 100) -> str:
     if result.output.strip():
         shown = result.output.strip().splitlines()[:8]
         out += ["", "Your code printed (the grader ignores it):"] + [f"  | {s}" for s in shown]
-    return "\n".join(out)
+    return _utf8("\n".join(out))
 
 
 def html(result: Result) -> str:
@@ -127,7 +160,7 @@ def html(result: Result) -> str:
     if png:
         picture = (f"<p>{esc(png[0])}</p><img src='data:image/png;base64,{png[1]}' "
                    "style='max-width:560px'>")
-    return (
+    return _utf8(
         f"<div><p>{head}</p><table><tr><th></th><th>test</th><th>points</th><th>why</th></tr>"
         + "".join(rows)
         + f"</table><p><b>Score: {_points(result.score)} / {_points(result.max_score)}</b> "
@@ -150,20 +183,21 @@ def gradescope(result: Result) -> dict[str, Any]:
             "score": round(t.score, 4),
             "max_score": t.test.points,
             "status": "passed" if t.status == "passed" else "failed",
-            "output": "\n".join(test_lines(t)),
+            "output": bounded("\n".join(map(bounded, test_lines(t))), MAX_FIELD),
             "visibility": "after_published" if t.test.hidden else "visible",
         })
     return {
         "score": round(result.score, 4),
         "execution_time": round(result.elapsed, 3),
-        "output": "\n".join(header(result)[1:]) or "Graded.",
+        "output": bounded("\n".join(header(result)[1:]), MAX_FIELD) or "Graded.",
         "visibility": "visible",
         "stdout_visibility": "hidden",
         "tests": tests,
     }
 
 
-CSV_FIXED = ["submission", "score", "max_score", "status", "misconceptions", "seconds"]
+CSV_FIXED = ["submission", "score", "max_score", "status", "reason", "misconceptions",
+             "seconds"]
 
 
 def csv_header(result: Result) -> list[str]:
@@ -171,20 +205,44 @@ def csv_header(result: Result) -> list[str]:
 
 
 def csv_row(name: str, result: Result) -> dict[str, Any]:
+    """A row of ``grades.csv``; ``reason`` says why a refused submission was (one line)."""
     status = "refused" if result.problems else "graded"
     found = sorted({f"{t.test.function}:{t.misconception.key}" for t in _scored(result)
                     if t.misconception})
+    reason = bounded(" ".join("; ".join(result.problems).split()))
     row: dict[str, Any] = {
         "submission": name, "score": round(result.score, 4), "max_score": result.max_score,
-        "status": status, "misconceptions": " ".join(found),
+        "status": status, "reason": reason, "misconceptions": " ".join(found),
         "seconds": round(result.elapsed, 2),
     }
     row.update({t.test.name: round(t.score, 4) for t in _scored(result)})
     return row
 
 
+def csv_cell(value: Any) -> Any:
+    """A text cell that would start a formula, quoted with ``'`` (OWASP's advice) so that a
+    spreadsheet shows it as text; numbers as they are."""
+    if isinstance(value, str):
+        value = bounded(value, MAX_FIELD)
+        return "'" + value if value.startswith(FORMULA) else value
+    return value
+
+
 def write_csv(path: Path, header_: list[str], rows: list[dict[str, Any]]) -> None:
-    with open(path, "w", newline="", encoding="utf-8") as f:
-        w = csv.DictWriter(f, fieldnames=header_, extrasaction="ignore")
-        w.writeheader()
-        w.writerows(rows)
+    with create(path) as f:
+        w = csv.writer(f)
+        w.writerow([csv_cell(h) for h in header_])
+        w.writerows([csv_cell(row.get(h, "")) for h in header_] for row in rows)
+
+
+def create(path: Path) -> TextIO:
+    """``path`` opened to be written as UTF-8 text (from the start), if it is a regular file
+    or new; a link or special file there is an ``OSError``, and is left as it is."""
+    fd = os.open(path, WRITE_FLAGS, 0o644)
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(f"{printable(path)} is not a regular file")
+    except BaseException:
+        os.close(fd)
+        raise
+    return open(fd, "w", encoding="utf-8", errors="backslashreplace", newline="")

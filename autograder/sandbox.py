@@ -1,45 +1,49 @@
 """Run a submission's functions in a separate, limited interpreter.
 
-One :class:`Sandbox` per submission holds a temporary directory with the submission, a copy
-of the child's own code (:mod:`autograder.child` and :mod:`autograder.protocol`, so nothing
-runs from the repository) and at most one live child. How the child is isolated depends on
-what the machine allows (:func:`isolation`), strongest first:
+One :class:`Sandbox` per submission holds a private temporary folder (the child's log, and
+below the bubblewrap level its working directory) and at most one live child. How the child
+is isolated depends on what the machine allows (:class:`Isolation`, strongest first; the
+guarantees of each are in ``docs/sandbox.md``):
 
-``"namespaces"`` (Linux with user namespaces)
-    ``unshare --user --map-root-user --mount --net --pid --fork``: no network, a PID
-    namespace (every process the submission forks dies with it), and a private file system
-    entered with ``chroot``: read-only bind mounts of the system libraries, the interpreter
-    and its standard library (every ``site-packages`` hidden), numpy and the child's code,
-    and the working directory, the one writable place. The repository, the reference, the
-    grader's output, other submissions, ``/proc`` and the home directory do not exist for
-    the submission.
-``"unshare"``
-    the same without the private file system (when mounts are not allowed).
-``"plain"`` (macOS with Python 3.13 or newer, containers without namespaces)
-    a separate process group only; the child's audit hook alone keeps files, sockets and
-    processes out of reach. Reports say so.
-``"portable"`` (Windows, older macOS Pythons, any system without the POSIX process controls
-of :func:`posix_controls`)
-    the audit hook alone, and no resource limits: no memory or CPU-time limit, and the
-    child alone is killed (it may start no process). Reports say so.
+``bubblewrap`` (Linux with ``bwrap`` and libseccomp; the grader may be root or not)
+    The kernel is the boundary. ``bwrap`` runs as an unprivileged user (the grader's own, or
+    :data:`SANDBOX_UID` when the grader is root) and starts the child in new user, mount,
+    PID, network, IPC, UTS and cgroup namespaces, as uid :data:`SANDBOX_UID` there too, with
+    every capability dropped, ``no_new_privs`` set, nested user namespaces disabled and the
+    seccomp filter of :mod:`autograder.seccomp` (no new processes, no mounts, no ptrace, no
+    sockets but AF_UNIX...). Its root file system is entered with ``pivot_root`` and holds
+    only the minimal runtime of :mod:`autograder.runtime` (this interpreter, the standard
+    library a submission may use, numpy, their shared libraries), the dynamic loader, the
+    child's two files and ``/sandbox/work``, a tmpfs of ``Limits.disk_mb``: the one writable
+    place. No host path, ``/proc`` included, exists there.
+``unprivileged`` (Linux, grader running as root, no user namespaces: Docker's default
+    seccomp profile, Ubuntu 24.04's AppArmor rule, some hosted graders)
+    the same minimal runtime run directly as :data:`SANDBOX_UID` in a working directory of
+    its own, with the process and file limits below and the audit hook; no private file
+    system.
+``plain`` (any other POSIX system)
+    the grader's own interpreter as the grader's own user, with the limits below and the
+    audit hook.
+``portable`` (Windows, older macOS Pythons, anything without the POSIX process controls of
+    :func:`posix_controls`)
+    the audit hook alone and wall-clock deadlines: no memory or CPU-time limit.
 
 In every case the child runs as ``python -I -S -B -u`` (isolated mode, no site-packages, no
-bytecode writes) with a minimal environment (no seed, no paths) in a fresh working
-directory, and talks to the grader over its own standard input and output (the child moves
-them out of the submission's reach); each case has a wall-clock deadline enforced here, by
-waiting for the child's answer on a thread (:class:`Replies`), which works on every
-platform. At the POSIX levels it also has address-space and file-size limits, and a
-CPU-time limit for its whole life sized for all its cases (a backstop). A case that hangs,
-crashes the interpreter or answers with garbage is *fatal*: the child is killed and a fresh
-one runs the remaining cases, so one slow or crashing case costs only itself (after
-``Limits.max_fatal`` of them in one test, or one forged answer, the rest of it is skipped).
-The levels differ only in the command that starts the child, whether it limits itself, and
-how it is ended (:meth:`Sandbox._reap`).
+bytecode writes) with a minimal environment (no seed, no paths), and talks to the grader over
+its own standard input and output (the child moves them out of the submission's reach). Each
+case has a wall-clock deadline enforced here, by waiting for the child's answer on a thread
+(:class:`Replies`), and the whole submission a wall-clock budget (``Limits.budget``) after
+which what is left scores 0. At the POSIX levels the child also limits its address space,
+CPU time (for its whole life, sized for all its cases), file size and thread count. A case
+that hangs, crashes the interpreter or answers with garbage is *fatal*: the child is killed
+and a fresh one runs the remaining cases, so one slow or crashing case costs only itself
+(after ``Limits.max_fatal`` of them in one test, or one forged answer, the rest of it is
+skipped).
 """
 
 from __future__ import annotations
 
-import glob
+import enum
 import json
 import math
 import os
@@ -47,10 +51,8 @@ import queue
 import secrets
 import shutil
 import signal
-import site
 import subprocess
 import sys
-import sysconfig
 import tempfile
 import threading
 import time
@@ -62,62 +64,95 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from .protocol import ProtocolError, Value, decode_value, encode_args, read_frame, write_frame
+from . import runtime, seccomp
+from .protocol import (
+    MAX_FRAME,
+    ProtocolError,
+    Value,
+    decode_value,
+    encode_args,
+    numbers_in,
+    read_frame,
+    write_frame,
+)
 
 RUNTIME = (Path(__file__).with_name("child.py"), Path(__file__).with_name("protocol.py"))
-UNSHARE = ["unshare", "--user", "--map-root-user", "--net", "--pid", "--fork", "--kill-child"]
-LEVELS = ("namespaces", "unshare", "plain", "portable")  # strongest first
 FATAL = ("timeout", "crash", "garbage")
-INSIDE = "/sandbox"  # where the working directory, the child's code and numpy appear
-# The shell stays the namespace's first process and exits with the child's status (128 + n
-# for a signal n), so the status of a child killed by a signal is never lost. The child's
-# stderr is the shell's, kept on descriptor 3 (free: the grader's pipes are 0 and 1); the
-# shell's own (its "Killed" notices, printed outside the subshell that runs the child) goes
-# to /dev/null.
-WAIT_SCRIPT = r"""
-exec 3>&2 2>/dev/null
-(exec "$@" 2>&3 3>&-)
-exit $?
-"""
-# Arguments: the new root (a skeleton of empty mount points, made by Sandbox), (kind,
-# source, target) triples, then "--" and the command. One process per mount; then the
-# command runs as in WAIT_SCRIPT.
-MOUNT_SCRIPT = r"""
-set -eu
-root=$1
-shift
-mount --rbind "$root" "$root"
-while [ "$1" != "--" ]; do
-    case $1 in
-        ro) mount --rbind -o ro "$2" "$root$3" ;;
-        rw) mount --bind "$2" "$root$3" ;;
-        hide) if [ -d "$root$3" ]; then mount -t tmpfs -o ro,size=4k hidden "$root$3"; fi ;;
-    esac
-    shift 3
-done
-shift
-mount -o remount,bind,ro "$root"
-set +e
-exec 3>&2 2>/dev/null
-(exec chroot "$root" "$@" 2>&3 3>&-)
-exit $?
-"""
+INSIDE = "/sandbox"  # where the runtime, the child's files and the working directory appear
+SANDBOX_UID = 65534  # the unprivileged user a root grader runs submissions as ("nobody")
+# RLIMIT_NPROC of the child: threads (bubblewrap refuses new processes; its count is per user
+# namespace) or, run as the sandbox user without namespaces, that user's threads and
+# processes together, so a submission there holds at most TASKS x memory_mb.
+TASKS = {"bubblewrap": 32, "unprivileged": 4}
+
+
+class Isolation(str, enum.Enum):
+    """How strongly a submission is kept from the grader; members compare equal to their
+    names (``Isolation.PLAIN == "plain"``) and are ordered strongest first."""
+
+    BUBBLEWRAP = "bubblewrap"
+    UNPRIVILEGED = "unprivileged"
+    PLAIN = "plain"
+    PORTABLE = "portable"
+
+    __str__ = str.__str__
+    __format__ = str.__format__
+
+    @property
+    def rank(self) -> int:
+        """0 for the strongest level."""
+        return list(Isolation).index(self)
+
+    @property
+    def posix(self) -> bool:
+        """Process groups, ``wait4`` and resource limits are used."""
+        return self is not Isolation.PORTABLE
+
+    @property
+    def staged(self) -> bool:
+        """The child runs the minimal runtime of :mod:`autograder.runtime`."""
+        return self in (Isolation.BUBBLEWRAP, Isolation.UNPRIVILEGED)
+
+    @property
+    def note(self) -> str:
+        """What a report says of this level ("" for the strongest)."""
+        return ISOLATION_NOTES[self]
+
+
+LEVELS = tuple(level.value for level in Isolation)
+ISOLATION_NOTES = {
+    Isolation.BUBBLEWRAP: "",
+    Isolation.UNPRIVILEGED: "(No Linux namespaces here: the sandbox runs your code as an "
+                            "unprivileged user with time, memory and file limits, and its "
+                            "audit hook keeps other files out of reach.)",
+    Isolation.PLAIN: "(No Linux namespaces here: the sandbox still limits time, memory, files "
+                     "and imports, with its audit hook alone.)",
+    Isolation.PORTABLE: "(Weaker isolation on this system: the sandbox's audit hook alone keeps "
+                        "files, imports, sockets and processes out of reach, and each case "
+                        "still has its time limit, but memory and CPU time are not limited.)",
+}
 
 
 @dataclass(frozen=True)
 class Limits:
-    """Resource limits for one submission's child interpreter.
+    """Resource limits for one submission.
 
-    ``case_timeout`` is the wall-clock time one case may take; ``cpu_seconds`` the CPU time
-    one interpreter may use over its whole life, a backstop for work the deadlines do not
-    see (threads); None sizes it for every case to use its ``case_timeout``. The
-    ``"portable"`` level keeps the wall-clock limits only.
+    ``case_timeout`` is the wall-clock time one case may take and ``budget`` the wall-clock
+    time of the whole submission (loading and every case; what is left when it runs out
+    scores 0). ``cpu_seconds`` is the CPU time one interpreter may use over its whole life, a
+    backstop for work the deadlines do not see (threads); None sizes it for every case to
+    use its ``case_timeout``. ``memory_mb`` bounds the submission's address space (one
+    process at the bubblewrap level, where it can start no other), ``disk_mb`` its writable
+    tmpfs (bubblewrap) or any one file it writes (below). The ``"portable"`` level keeps the
+    wall-clock limits only.
     """
 
     cpu_seconds: float | None = None
     memory_mb: int = 1024
     load_timeout: float = 10.0  # wall seconds to start and import the submission
     case_timeout: float = 2.0  # wall seconds per case
+    budget: float = 120.0  # wall seconds for the whole submission
+    disk_mb: int = 16
     max_fatal: int = 2  # cases of one test that may stop the interpreter before the rest skip
 
 
@@ -136,31 +171,53 @@ class Outcome:
     message: str = ""
 
 
-ISOLATION_NOTES = {
-    "namespaces": "",
-    "unshare": "(No private file system here: the sandbox has no network and its own "
-               "processes, and its audit hook keeps files outside its folder out of reach.)",
-    "plain": "(No Linux namespaces here: the sandbox still limits time, memory, files and "
-             "imports, with its audit hook alone.)",
-    "portable": "(Weaker isolation on this system: the sandbox's audit hook alone keeps "
-                "files, imports, sockets and processes out of reach, and each case still has "
-                "its time limit, but memory and CPU time are not limited.)",
-}
+@dataclass
+class Probe:
+    """The strongest level this machine gives, and why no stronger one."""
+
+    level: Isolation
+    why_not_stronger: str = ""
 
 
 @cache
-def isolation() -> str:
-    """The strongest level of :data:`LEVELS` that starts a working child here (probed once:
-    on Linux with ``unshare`` a child is started at each namespace level in turn until one
-    loads an empty submission)."""
+def probe() -> Probe:
+    """Start a child at each level in turn, strongest first, until one loads an empty
+    submission (probed once per process)."""
     if not posix_controls():
-        return "portable"
-    if sys.platform == "linux" and shutil.which("unshare"):
-        for level in LEVELS[:2]:
-            with Sandbox("", [], Limits(load_timeout=20.0), frozenset(), level=level) as box:
-                if box.start().status == "ok":
-                    return level
-    return "plain"
+        return Probe(Isolation.PORTABLE, "this system lacks the POSIX process controls")
+    why = ""
+    candidates = [Isolation.PLAIN]
+    if sys.platform == "linux":
+        candidates[:0] = [Isolation.BUBBLEWRAP] + ([Isolation.UNPRIVILEGED]
+                                                     if os.geteuid() == 0 else [])
+    for level in candidates:
+        missing = _missing_for(level)
+        if missing:
+            why = why or missing
+            continue
+        with Sandbox("", [], Limits(load_timeout=20.0), frozenset(), level=level) as box:
+            started = box.start()
+            if started.status == "ok":
+                return Probe(level, why)
+            why = why or f"the {level} sandbox did not start here: " + (
+                started.message or box.output(300).strip() or started.status)
+    return Probe(Isolation.PLAIN, why)
+
+
+def _missing_for(level: Isolation) -> str:
+    """What this machine lacks for ``level`` (the package to install), or ""."""
+    if level is not Isolation.BUBBLEWRAP:
+        return ""
+    if not shutil.which("bwrap"):
+        return "bubblewrap is not installed (Debian/Ubuntu: apt-get install bubblewrap)"
+    if not seccomp.available():
+        return "libseccomp is not installed (Debian/Ubuntu: apt-get install libseccomp2)"
+    return ""
+
+
+def isolation() -> Isolation:
+    """The strongest level of :class:`Isolation` that starts a working child here."""
+    return probe().level
 
 
 def posix_controls() -> bool:
@@ -171,7 +228,7 @@ def posix_controls() -> bool:
         hasattr(os, f) for f in ("killpg", "waitid", "wait4"))
 
 
-def level_for(requested: str | None) -> str:
+def level_for(requested: str | None) -> Isolation:
     """``requested`` if this machine offers it (it or a stronger level), else ValueError;
     None: the strongest, :func:`isolation`."""
     best = isolation()
@@ -179,10 +236,23 @@ def level_for(requested: str | None) -> str:
         return best
     if requested not in LEVELS:
         raise ValueError(f"isolation: {requested!r} is not one of {', '.join(LEVELS)}")
-    if LEVELS.index(requested) < LEVELS.index(best):
+    level = Isolation(requested)
+    if level.rank < best.rank:
         raise ValueError(f"isolation: {requested!r} is not available on this machine (the "
-                         f"strongest here is {best!r})")
-    return requested
+                         f"strongest here is {best!r}: {probe().why_not_stronger})")
+    return level
+
+
+def weaker_warning(level: Isolation) -> str | None:
+    """What ``grade`` warns when ``level`` is not the strongest level there is, with what
+    would give this machine a stronger one."""
+    if level is Isolation.BUBBLEWRAP:
+        return None
+    best = probe()
+    text = f"warning: isolation is weaker on this machine ({level}): {level.note.strip('()')}"
+    if best.level.rank < level.rank:
+        return text + f" (--isolation {best.level} is available here.)"
+    return text + f" For a private file system per submission: {best.why_not_stronger}."
 
 
 class Replies:
@@ -195,6 +265,7 @@ class Replies:
         self._asked = threading.Semaphore(0)
         self._got: queue.SimpleQueue[tuple[Any, Exception | None]] = queue.SimpleQueue()
         self._pending = False  # a frame was asked for and has not come yet
+        self.parse_at_most = MAX_FRAME  # longer frames are read and dropped unparsed
         self._closed = False
         self._thread = threading.Thread(target=self._read, daemon=True)
         self._thread.start()
@@ -205,7 +276,7 @@ class Replies:
             if self._closed:
                 return
             try:
-                frame, error = read_frame(self.stream.fileno()), None
+                frame, error = read_frame(self.stream.fileno(), self.parse_at_most), None
             except ProtocolError as exc:
                 frame, error = None, exc
             except OSError:  # the pipe is gone: as good as its end
@@ -214,11 +285,12 @@ class Replies:
             if frame is None:
                 return
 
-    def get(self, deadline: float) -> Any | None:
+    def get(self, deadline: float, parse_at_most: int = MAX_FRAME) -> Any | None:
         """The next frame; None at end of file (the child is gone); ``TimeoutError`` past
         ``deadline`` (monotonic); ``ProtocolError`` for a malformed one."""
         if not self._pending:
             self._pending = True
+            self.parse_at_most = parse_at_most
             self._asked.release()
         try:
             frame, error = self._got.get(timeout=max(0.0, deadline - time.monotonic()))
@@ -238,78 +310,13 @@ class Replies:
             self.stream.close()
 
 
-def _numpy_dirs() -> tuple[str, list[str]]:
-    """numpy's parent directory (for ``sys.path``) and its package folders."""
-    pkg = Path(np.__file__).resolve().parent
-    dirs = [str(pkg)] + [str(p) for p in pkg.parent.glob("numpy.libs")]
-    return str(pkg.parent), dirs
-
-
-@cache
-def _mounts() -> tuple[tuple[str, str, str], ...]:
-    """The (kind, source, target) mounts of the private file system but the sandbox's own
-    folders: read-only the system libraries, the interpreter and its standard library and
-    numpy (``ro``), two devices (``rw``), every site-packages folder hidden (``hide``), and the
-    symbolic links of a merged /usr (``link``, made in the skeleton)."""
-    out: list[tuple[str, str, str]] = []
-
-    def add(src: str, dst: str) -> None:
-        if not any(dst == b or dst.startswith(b + "/") for k, _, b in out if k == "ro"):
-            out.append(("ro", src, dst))
-
-    for d in ("/usr", "/lib", "/lib64", "/lib32", "/libx32"):
-        if os.path.islink(d):
-            out.append(("link", os.readlink(d), d))
-        elif os.path.isdir(d):
-            add(d, d)
-    if os.path.isfile("/etc/ld.so.cache"):
-        add("/etc/ld.so.cache", "/etc/ld.so.cache")
-    add(os.path.realpath(sys.executable), os.path.realpath(sys.executable))
-    stdlib = os.path.realpath(os.path.dirname(os.__file__))
-    for d in (sysconfig.get_config_var("LIBDIR"), stdlib):
-        if d and os.path.isdir(d):
-            add(os.path.realpath(d), os.path.realpath(d))
-    for d in _numpy_dirs()[1]:
-        out.append(("ro", d, f"{INSIDE}/lib/{Path(d).name}"))
-    out += [("rw", dev, dev) for dev in ("/dev/null", "/dev/urandom")]
-    out += [("hide", "-", d) for d in sorted(_site_dirs(stdlib))]
-    return tuple(out)
-
-
-def _skeleton(root: Path, mounts: list[tuple[str, str, str]]) -> None:
-    """The empty mount points (folders, or files for files) and links of ``mounts``."""
-    for kind, src, dst in mounts:
-        target = root / dst.lstrip("/")
-        if kind == "link":
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.symlink_to(src)
-        elif kind in ("ro", "rw") and not os.path.isdir(src):
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.touch()
-        elif kind in ("ro", "rw"):
-            target.mkdir(parents=True, exist_ok=True)
-
-
-def _site_dirs(stdlib: str) -> set[str]:
-    """Every folder of installed packages this interpreter (or the system's) could show."""
-    found = {os.path.join(stdlib, "site-packages"), os.path.join(stdlib, "dist-packages"),
-             sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}
-    try:
-        found.update(site.getsitepackages() + [site.getusersitepackages()])
-    except AttributeError:  # an old virtualenv's site module
-        pass
-    found.update(p for p in sys.path if p and "-packages" in p)
-    for pattern in ("/usr/lib*/python3*/*-packages", "/usr/local/lib*/python3*/*-packages"):
-        found.update(glob.glob(pattern))
-    return {os.path.realpath(d) for d in found if os.path.isdir(d)}
-
-
 class Sandbox:
-    """A submission's source in a private directory, and the child that runs it.
+    """A submission's source, a private temporary folder, and the child that runs it.
 
     Use as a context manager; :meth:`call` starts a child when none is running. ``cases``
     is how many cases the child will answer in all (it sizes the CPU-time backstop);
-    ``level`` overrides :func:`isolation`.
+    ``level`` overrides :func:`isolation`. The wall-clock budget (``limits.budget``) runs
+    from construction.
     """
 
     def __init__(self, source: str, functions: list[str], limits: Limits,
@@ -317,92 +324,150 @@ class Sandbox:
         self.limits = limits
         self.functions = functions
         self.allowed = sorted(allowed_imports)
-        self.level = level or isolation()
-        self.posix = self.level != "portable"  # process groups, wait4, rlimits
-        self.memory_mb = limits.memory_mb if self.posix else None  # None: no limit
+        self.level = Isolation(level) if level is not None else isolation()
+        self.memory_mb = limits.memory_mb if self.level.posix else None  # None: no limit
         self.cpu_seconds = math.ceil(limits.cpu_seconds if limits.cpu_seconds is not None
                                      else limits.load_timeout + limits.case_timeout * cases)
+        self.deadline = time.monotonic() + limits.budget
+        self.source = source
         # the real, long path (no symbolic link, no Windows ~1 name): what the child's hook sees
         self.root = Path(os.path.realpath(tempfile.mkdtemp(prefix="autograder-")))
-        self.work = self.root / "work"
-        self.work.mkdir()
         self.runtime = self.root / "runtime"
         self.runtime.mkdir()
         for f in RUNTIME:
             shutil.copy(f, self.runtime / f.name)
-        (self.work / "submission.py").write_text(source, encoding="utf-8")
+        self.work = self.root / "work"
+        if self.level is not Isolation.BUBBLEWRAP:  # bubblewrap's work folder is a tmpfs
+            self.work.mkdir()
+            (self.work / "submission.py").write_text(source, encoding="utf-8")
+            if self.level is Isolation.UNPRIVILEGED:  # the sandbox user's, and only its
+                os.chmod(self.root, 0o711)
+                os.chmod(self.runtime, 0o755)
+                os.chown(self.work, SANDBOX_UID, SANDBOX_UID)
+                os.chmod(self.work, 0o700)
         self.proc: subprocess.Popen | None = None
         self.missing: list[str] = []
         self.load_error: dict[str, Any] | None = None
         self.stdout = self.root / "stdout.txt"
         self._replies: Replies | None = None
-        self._wrapped = self.level in ("namespaces", "unshare")  # a shell, see WAIT_SCRIPT
 
     def __enter__(self) -> Sandbox:
         return self
 
     def __exit__(self, *exc) -> None:
         self.stop()
-        shutil.rmtree(self.root, ignore_errors=True)
+        remove_tree(self.root)
 
     # --- lifecycle ---------------------------------------------------------------------------
 
-    def _command(self, level: str, config: dict) -> list[str]:
-        python = os.path.realpath(sys.executable)
-        if level == "namespaces":
-            child = f"{INSIDE}/runtime/child.py"
-            config.update(cwd=f"{INSIDE}/work", submission=f"{INSIDE}/work/submission.py",
-                          protocol=f"{INSIDE}/runtime/protocol.py", numpy_path=f"{INSIDE}/lib",
-                          numpy_dirs=[f"{INSIDE}/lib/{Path(d).name}" for d in _numpy_dirs()[1]])
+    def _command(self, config: dict, program: list[str] | None = None
+                 ) -> tuple[list[str], list[int]]:
+        """The command that starts the child, and the descriptors it must inherit (the
+        bubblewrap level reads its files and filter from them). ``program``: the
+        interpreter's arguments instead of the child's (the tests' raw attacks)."""
+        level = self.level
+        if level.staged:
+            rt = runtime.staged()
+            inside = level is Isolation.BUBBLEWRAP
+            base = INSIDE if inside else str(self.root)
+            python = f"{INSIDE}/python/bin/python3" if inside else str(rt.python)
+            numpy_path = f"{INSIDE}/lib" if inside else str(rt.numpy_path)
+            stdlib = (f"{INSIDE}/python/lib/python{rt.version}" if inside else str(rt.stdlib))
         else:
-            child = str(self.runtime / "child.py")
-            numpy_path, numpy_dirs = _numpy_dirs()
-            config.update(cwd=str(self.work), submission=str(self.work / "submission.py"),
-                          protocol=str(self.runtime / "protocol.py"), numpy_path=numpy_path,
-                          numpy_dirs=numpy_dirs)
-        cmd = [python, "-I", "-S", "-B", "-u", child, json.dumps(config)]
-        if level == "namespaces":
-            mounts = [*_mounts(), ("ro", str(self.runtime), f"{INSIDE}/runtime"),
-                      ("rw", str(self.work), f"{INSIDE}/work")]
-            fs = self.root / "fs"
-            if not fs.exists():
-                _skeleton(fs, mounts)
-            return [*UNSHARE, "--mount", "sh", "-c", MOUNT_SCRIPT, "sh", str(fs),
-                    *(x for m in mounts if m[0] != "link" for x in m), "--", *cmd]
-        if level == "unshare":
-            return [*UNSHARE, "sh", "-c", WAIT_SCRIPT, "sh", *cmd]
-        return cmd
+            base, python = str(self.root), os.path.realpath(sys.executable)
+            numpy_path = str(Path(np.__file__).resolve().parent.parent)
+            stdlib = ""
+        config.update(cwd=f"{base}/work", submission=f"{base}/work/submission.py",
+                      protocol=f"{base}/runtime/protocol.py", numpy_path=numpy_path,
+                      numpy_dirs=[f"{numpy_path}/numpy", f"{numpy_path}/numpy.libs"],
+                      stdlib=stdlib)
+        cmd = [python, *(program or ["-I", "-S", "-B", "-u", f"{base}/runtime/child.py",
+                                     json.dumps(config)])]
+        limits = config.get("limits") or {}
+        prlimit = shutil.which("prlimit") if level.staged else None
+        # The limits hold from the interpreter's first instruction, not from the child's own
+        # setrlimit calls: prlimit sets them on what it starts, and they pass on from there.
+        cap = [prlimit, f"--as={limits['memory_mb'] << 20}",
+               f"--cpu={limits['cpu_seconds']}:{limits['cpu_seconds'] + 1}",
+               f"--fsize={limits['file_mb'] << 20}", "--core=0", "--nofile=64",
+               f"--nproc={limits['tasks']}", "--"] if prlimit and limits else []
+        if level is not Isolation.BUBBLEWRAP:
+            return [*cap, *cmd], []
+        fds = [_memfd(seccomp.program()), _memfd(self.source.encode("utf-8"))]
+        fds += [_memfd(f.read_bytes()) for f in RUNTIME]
+        uid = str(SANDBOX_UID)
+        return [*cap, "bwrap", "--unshare-all", "--unshare-user", "--disable-userns",
+                "--die-with-parent", "--new-session", "--uid", uid, "--gid", uid,
+                "--hostname", "sandbox",
+                "--ro-bind", rt.loader, rt.loader,
+                "--ro-bind", str(rt.root / "python"), f"{INSIDE}/python",
+                "--ro-bind", str(rt.root / "lib"), f"{INSIDE}/lib",
+                "--ro-bind-data", str(fds[2]), f"{INSIDE}/runtime/{RUNTIME[0].name}",
+                "--ro-bind-data", str(fds[3]), f"{INSIDE}/runtime/{RUNTIME[1].name}",
+                "--size", str(self.limits.disk_mb << 20), "--tmpfs", f"{INSIDE}/work",
+                "--file", str(fds[1]), f"{INSIDE}/work/submission.py",
+                "--dev", "/dev", "--remount-ro", "/", "--seccomp", str(fds[0]),
+                "--chdir", f"{INSIDE}/work", "--", *cmd], fds
 
     def start(self) -> Outcome:
         """Start a child and wait until the submission is loaded (status ``ok`` if it is)."""
+        if time.monotonic() >= self.deadline:
+            return Outcome("timeout", message=self._budget_message())
         config = {"functions": self.functions, "allowed": self.allowed,
-                  "limits": {"cpu_seconds": self.cpu_seconds, "memory_mb": self.memory_mb}
-                  if self.posix else None}
-        cmd = self._command(self.level, config)
-        with open(self.stdout, "ab") as log:
-            self.proc = subprocess.Popen(
-                cmd, cwd=self.work, env=_environment(config["cwd"]), stdin=subprocess.PIPE,
-                stdout=subprocess.PIPE, stderr=log, bufsize=0, start_new_session=self.posix,
-                creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0),  # Windows: no console
-            )
+                  "limits": {"cpu_seconds": self.cpu_seconds, "memory_mb": self.memory_mb,
+                             "file_mb": self.limits.disk_mb, "tasks": TASKS.get(self.level)}
+                  if self.level.posix else None}
+        try:
+            with open(self.stdout, "ab") as log:
+                self.proc = self.spawn(config, stdout=subprocess.PIPE, stderr=log)
+        except OSError as exc:  # the runtime could not be staged, say
+            return Outcome("crash", message=f"the sandbox could not be prepared ({exc})")
         assert self.proc.stdout is not None
         self._replies = Replies(self.proc.stdout)
         first = self._receive(time.monotonic() + self.limits.load_timeout, "your file")
         if first.status != "ok":
             return first
-        frame = first.value
+        frame = first.value if isinstance(first.value, dict) else {}
         if frame.get("op") == "load_error":
-            self.load_error = frame["error"]
+            try:
+                self.load_error = _error(frame.get("error"))
+            except ProtocolError:
+                self.load_error = None
             self.stop()
-            return Outcome("error", error=frame["error"])
-        if frame.get("op") != "ready" or not isinstance(frame.get("missing"), list):
+            if self.load_error is None:
+                return Outcome("garbage", message="the sandbox sent an unexpected message")
+            return Outcome("error", error=self.load_error)
+        missing = frame.get("missing")
+        if (frame.get("op") != "ready" or not isinstance(missing, list)
+                or not all(m in self.functions for m in missing if isinstance(m, str))
+                or not all(isinstance(m, str) for m in missing)):
             self.stop()
             return Outcome("garbage", message="the sandbox sent an unexpected message")
-        self.missing = [str(m) for m in frame["missing"]]
+        self.missing = list(missing)
         return Outcome("ok")
 
+    def spawn(self, config: dict, program: list[str] | None = None,
+              **popen: Any) -> subprocess.Popen:
+        """Start the child's process as :meth:`_command` says, as :data:`SANDBOX_UID` when the
+        grader is root (a submission never runs as root), with a pipe for its input."""
+        cmd, fds = self._command(config, program)
+        if self.level.staged and os.geteuid() == 0:
+            popen.update(user=SANDBOX_UID, group=SANDBOX_UID, extra_groups=[])
+        env = _environment(config["cwd"])
+        if self.level.staged:
+            env["LD_LIBRARY_PATH"] = (f"{INSIDE}/python/lib" if self.level is Isolation.BUBBLEWRAP
+                                      else str(runtime.staged().libs))
+        try:
+            return subprocess.Popen(
+                cmd, cwd=self.root, env=env, stdin=subprocess.PIPE, bufsize=0,
+                start_new_session=self.level.posix, pass_fds=fds,
+                creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0), **popen)  # no console
+        finally:
+            for fd in fds:
+                os.close(fd)
+
     def stop(self) -> None:
-        """Kill the child (at the POSIX levels its whole process group and, under unshare,
+        """Kill the child (at the POSIX levels its whole process group, and with bubblewrap
         its PID namespace)."""
         if self.proc is None:
             return
@@ -423,7 +488,7 @@ class Sandbox:
         proc = self.proc
         if proc is None or proc.returncode is not None:
             return (None, None) if proc is None else (proc.returncode, None)
-        if not self.posix:  # no process group (it may start no process), no rusage
+        if not self.level.posix:  # no process group (it may start no process), no rusage
             if timeout is not None:
                 try:
                     proc.wait(timeout)
@@ -438,7 +503,7 @@ class Sandbox:
             if time.monotonic() >= deadline:
                 return None, None
             time.sleep(0.01)
-        try:
+        try:  # bwrap's own processes: killing them ends the PID namespace (--die-with-parent)
             os.killpg(proc.pid, signal.SIGKILL)
         except (ProcessLookupError, PermissionError):
             pass
@@ -448,34 +513,43 @@ class Sandbox:
             proc.returncode = -signal.SIGKILL
             return proc.returncode, None
         code = os.waitstatus_to_exitcode(status)
-        if self._wrapped and code > 128:  # the shell's 128 + n: the child died of signal n
+        if self.level is Isolation.BUBBLEWRAP and code > 128:  # bwrap's 128 + n: signal n
             code = 128 - code
         proc.returncode = code
         return code, usage.ru_utime + usage.ru_stime
 
     # --- calls -------------------------------------------------------------------------------
 
-    def call(self, fn: str, cases: list[tuple[Any, ...]]) -> list[Outcome]:
-        """Evaluate ``fn`` on each argument tuple. After a fatal case a fresh child runs the
-        rest; after ``limits.max_fatal`` fatal cases (or forged frames) the rest are skipped."""
+    def call(self, fn: str, cases: list[tuple[Any, ...]],
+             sizes: list[int] | None = None) -> list[Outcome]:
+        """Evaluate ``fn`` on each argument tuple. ``sizes[i]``: the most numbers case ``i``
+        may return (a larger answer is not decoded; see :func:`_bounded`). After a fatal
+        case a fresh child runs the rest; after ``limits.max_fatal`` fatal cases (or forged
+        frames) the rest are skipped, and so is everything once the budget is spent."""
+        sizes = sizes if sizes is not None else [MAX_NUMBERS] * len(cases)
         outcomes: list[Outcome] = []
         while len(outcomes) < len(cases):
+            if time.monotonic() >= self.deadline:
+                break
             if self.proc is None:
                 started = self.start()
                 if started.status != "ok":
                     outcomes.append(started)
                     break
-            outcomes += self._run(fn, cases[len(outcomes):])
+            done = len(outcomes)
+            outcomes += self._run(fn, cases[done:], sizes[done:])
             fatal = sum(o.status in FATAL for o in outcomes)
             if outcomes[-1].status == "garbage" or fatal >= self.limits.max_fatal:
                 break
         left = len(cases) - len(outcomes)
+        if left and time.monotonic() >= self.deadline:
+            return outcomes + [Outcome("skipped", message=self._budget_message())] * left
         fatal = sum(o.status in FATAL for o in outcomes)
         skipped = Outcome("skipped", message=f"not run: {fatal} case{'s' * (fatal > 1)} of this "
                                              "test stopped the interpreter")
         return outcomes + [skipped] * left
 
-    def _run(self, fn: str, cases: list[tuple[Any, ...]]) -> list[Outcome]:
+    def _run(self, fn: str, cases: list[tuple[Any, ...]], sizes: list[int]) -> list[Outcome]:
         """One request to the live child: the outcomes up to and including a fatal one."""
         nonce = secrets.token_hex(16)
         assert self.proc is not None and self.proc.stdin is not None
@@ -486,16 +560,23 @@ class Sandbox:
             return [self._fatal("crash", fn)]
         outcomes: list[Outcome] = []
         for i in range(len(cases)):
-            got = self._receive(time.monotonic() + self.limits.case_timeout, fn)
+            # JSON spends at most ~25 bytes on a number: a longer answer is dropped unread
+            got = self._receive(time.monotonic() + self.limits.case_timeout, fn,
+                                32 * sizes[i] + 4096)
             if got.status != "ok":
                 return outcomes + [got]
             frame = got.value
+            if isinstance(frame, dict) and set(frame) == {"oversized"}:
+                outcomes.append(Outcome("ok", value=Value(
+                    "other", f"answer of {frame['oversized']} bytes (far more numbers than "
+                             f"the {sizes[i]} that could make sense here)")))
+                continue
             if not isinstance(frame, dict) or frame.get("nonce") != nonce or frame.get("case") != i:
                 return outcomes + [self._fatal("garbage", _forged(fn))]
             try:
                 outcomes.append(
-                    Outcome("ok", value=decode_value(frame["value"])) if frame.get("ok") is True
-                    else Outcome("error", error=_error(frame["error"])))
+                    Outcome("ok", value=_bounded(frame["value"], sizes[i]))
+                    if frame.get("ok") is True else Outcome("error", error=_error(frame["error"])))
             except (ProtocolError, KeyError, TypeError) as exc:
                 return outcomes + [self._fatal("garbage", _forged(fn) + f" ({exc})")]
         done = self._receive(time.monotonic() + self.limits.case_timeout, fn)
@@ -504,13 +585,16 @@ class Sandbox:
             return [bad] * len(cases)
         return outcomes
 
-    def _receive(self, deadline: float, what: str) -> Outcome:
+    def _receive(self, deadline: float, what: str, parse_at_most: int = MAX_FRAME) -> Outcome:
         """The next frame as ``Outcome("ok", value=frame)``, or a fatal outcome; ``what`` is
-        running (a function's name, or "your file" while loading) for the messages."""
+        running (a function's name, or "your file" while loading) for the messages. The
+        submission's budget cuts every deadline short."""
         assert self._replies is not None
         try:
-            frame = self._replies.get(deadline)
+            frame = self._replies.get(min(deadline, self.deadline), parse_at_most)
         except TimeoutError:
+            if time.monotonic() >= self.deadline:
+                return self._fatal("timeout", self._budget_message())
             if what == "your file":
                 return self._fatal("timeout", f"your file did not finish loading within "
                                               f"{self.limits.load_timeout:g} s")
@@ -522,6 +606,10 @@ class Sandbox:
         if frame is None:
             return self._fatal("crash", what)
         return Outcome("ok", value=frame)  # type: ignore[arg-type]
+
+    def _budget_message(self) -> str:
+        return (f"not run: your submission used its whole time budget ({self.limits.budget:g} s "
+                "for all tests); what was left scores 0")
 
     def _fatal(self, status: str, what: str) -> Outcome:
         code = cpu = None
@@ -540,6 +628,93 @@ class Sandbox:
                 return f.read(limit).decode("utf-8", "replace")
         except OSError:
             return ""
+
+
+MAX_NUMBERS = 1 << 20  # the most numbers any answer may hold, whatever it is expected to be
+
+
+def _bounded(obj: Any, limit: int) -> Value:
+    """The child's value decoded, unless it declares more numbers than ``limit`` (then it is
+    described, not decoded: no answer costs the grader more than its expected size)."""
+    n = numbers_in(obj)
+    if n > limit:
+        return Value("other", f"array of {n} numbers (too large: at most {limit} make sense "
+                              "here)")
+    return decode_value(obj)
+
+
+def _memfd(data: bytes) -> int:
+    """A file holding ``data`` that exists only as a descriptor, read from the start."""
+    fd = os.memfd_create("autograder", 0)  # inheritable: bwrap reads it
+    os.write(fd, data)
+    os.lseek(fd, 0, os.SEEK_SET)
+    return fd
+
+
+def remove_tree(path: Path) -> None:
+    """Remove the folder ``path`` and everything in it, however deep and whatever the modes
+    a submission left: folders are moved up to ``path`` one level at a time (two open
+    descriptors, no recursion, no long paths) and removed once empty."""
+    try:
+        top = os.open(path, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+    except OSError:
+        return
+    stuck: set[str] = set()
+    moved = 0
+    try:
+        while True:
+            names = [e.name for e in os.scandir(top) if e.name not in stuck]
+            if not names:
+                break
+            for name in names:
+                if _unlink_or_empty(name, top):
+                    continue
+                try:
+                    sub = _open_dir(name, top)
+                except OSError:
+                    stuck.add(name)
+                    continue
+                try:
+                    for entry in os.scandir(sub):
+                        if not _unlink_or_empty(entry.name, sub):
+                            moved += 1
+                            os.rename(entry.name, f".moved-{moved}", src_dir_fd=sub,
+                                      dst_dir_fd=top)
+                except OSError:
+                    stuck.add(name)
+                finally:
+                    os.close(sub)
+    finally:
+        os.close(top)
+    try:
+        os.rmdir(path)
+    except OSError:
+        pass
+
+
+def _unlink_or_empty(name: str, parent: int) -> bool:
+    """Remove ``name`` if it is a file or an empty folder; False if it is a folder that is
+    not empty (or could not be removed)."""
+    try:
+        os.unlink(name, dir_fd=parent)
+        return True
+    except IsADirectoryError:
+        pass
+    except OSError:
+        return False
+    try:
+        os.rmdir(name, dir_fd=parent)
+        return True
+    except OSError:
+        return False
+
+
+def _open_dir(name: str, parent: int) -> int:
+    try:
+        return os.open(name, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW, dir_fd=parent)
+    except PermissionError:  # a folder its maker closed to everyone
+        os.chmod(name, 0o700, dir_fd=parent)
+        return os.open(name, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW, dir_fd=parent)
 
 
 def _environment(cwd: str) -> dict[str, str]:
@@ -578,14 +753,15 @@ def _crash_message(code: int | None, cpu: float | None, what: str, cpu_limit: fl
     """Why the interpreter stopped: the CPU time it used comes first, since the kernel ends a
     process over its CPU limit with SIGXCPU or SIGKILL and a wrapper may report either.
     ``memory_mb`` None: no memory limit (the portable level)."""
+    out_of_cpu = (f"{what} ran out of CPU time: the interpreter used its {cpu_limit:g} s of CPU "
+                  "time for all cases (threads still running?)")
     if cpu is not None and cpu >= 0.9 * cpu_limit:
-        return (f"{what} ran out of CPU time: the interpreter used its {cpu_limit:g} s of CPU "
-                "time for all cases (threads still running?)")
+        return out_of_cpu
     if code is None:
         return f"the interpreter stopped responding while {what} ran"
     if code < 0:  # a signal: POSIX only (Windows codes are unsigned)
         if -code == signal.SIGXCPU:
-            return f"{what} ran out of CPU time ({cpu_limit:g} s for all cases)"
+            return out_of_cpu
         if -code == signal.SIGKILL:
             limit = f"the limit is {memory_mb} MB" if memory_mb else "there is no limit here"
             return f"the interpreter was killed while {what} ran (out of memory? {limit})"

@@ -25,18 +25,24 @@ What was dropped that kept code needs, and what was graded instead, is reported 
 refusals and errors name the cell and the line (``cell 3, line 4``). The static check then
 refuses imports of anything but numpy and the harmless standard library, with the place and
 a reason; the sandbox enforces the same rule at run time for code that hides its imports.
+
+Only regular files are read, up to a size (:data:`MAX_BYTES`): a link could point at the
+reference or a system file, a named pipe or device could hang the grader. Whatever a file or
+notebook holds, what goes wrong is a :class:`SubmissionError` that says what and where.
 """
 
 from __future__ import annotations
 
 import ast
 import builtins
+import errno
 import json
-import sys
+import os
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .child import BLOCKED_STDLIB
+from .child import ALLOWED_STDLIB
 
 # Imported by notebooks to show things, never needed by the functions themselves.
 DISPLAY_MODULES = frozenset({"matplotlib", "IPython", "ipywidgets", "pyvista", "autograder",
@@ -45,6 +51,10 @@ WHY_NOT = {
     "course": "the course library is the reference you are compared with",
     "autograder": "the autograder is not part of a solution",
     "scipy": "the assignment asks you to implement the math yourself with numpy",
+    **dict.fromkeys(("ctypes", "cffi", "tkinter", "_tkinter", "subprocess", "multiprocessing",
+                     "socket", "code", "pdb"),
+                    "the grader runs no native code, other programs or other interpreters: "
+                    "use numpy and the Python standard library only"),
 }
 # Cell magics whose body IPython runs as Python in the notebook's namespace.
 PYTHON_CELL_MAGICS = frozenset({"time", "capture"})
@@ -56,10 +66,90 @@ DATA_BUILTINS = frozenset({
     "sorted", "str", "sum", "tuple", "zip",
 })
 BUILTIN_NAMES = frozenset(dir(builtins))
+# Far beyond any honest solution; bounds what the grader reads, parses and reports.
+MAX_BYTES = {".py": 1 << 20, ".ipynb": 5 << 20}
+# Not regular files, as a message names them.
+KINDS = ((stat.S_ISLNK, "a symbolic link"), (stat.S_ISDIR, "a folder"),
+         (stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISSOCK, "a socket"),
+         (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"))
+# O_NOFOLLOW: a link is refused by the open itself; O_NONBLOCK: a FIFO opens at once, unread.
+# Windows has neither (nor FIFOs); its rare links are caught by the lstat before the open.
+READ_FLAGS = (os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
+              | getattr(os, "O_BINARY", 0))
+JSON_TYPES = {dict: "an object", list: "a list", str: "a string", int: "a number",
+              float: "a number", bool: "true or false", type(None): "null"}
 
 
 class SubmissionError(ValueError):
     """The submission cannot be read (not UTF-8, not a notebook, ...)."""
+
+
+def printable(text: str | os.PathLike) -> str:
+    """A file name or path as it can be shown and written anywhere: bytes that are not UTF-8
+    as ``\\xe9``, control and invisible characters escaped (``\\n``, ``\\x1b``,
+    ``\\u202e``)."""
+    s = os.fsdecode(text)
+    out = []
+    for ch in s:
+        code = ord(ch)
+        if 0xDC80 <= code <= 0xDCFF:  # a byte that was not UTF-8 (os.fsdecode's surrogateescape)
+            out.append(f"\\x{code - 0xDC00:02x}")
+        else:
+            out.append(ch if ch.isprintable() else repr(ch)[1:-1])
+    return "".join(out)
+
+
+def _kind(mode: int) -> str:
+    return next((name for test, name in KINDS if test(mode)), "not a regular file")
+
+
+def read_regular(path: Path, limit: int | None = None) -> str:
+    """The UTF-8 text of ``path`` if it is a regular file of at most ``limit`` bytes (default:
+    :data:`MAX_BYTES` for its suffix); else a :class:`SubmissionError` saying what it is.
+
+    The type is checked on the opened descriptor (``fstat``), so nothing can be swapped in
+    between the check and the read; the ``lstat`` before only names what is refused.
+    """
+    shown = printable(path)
+    limit = limit or MAX_BYTES.get(path.suffix, MAX_BYTES[".py"])
+    try:
+        mode = os.lstat(path).st_mode
+        if not stat.S_ISREG(mode):
+            raise SubmissionError(f"{shown} is {_kind(mode)}: only regular files are graded")
+        fd = os.open(path, READ_FLAGS)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:  # became a link after the lstat
+            raise SubmissionError(f"{shown} is a symbolic link: only regular files are "
+                                  "graded") from None
+        raise SubmissionError(f"cannot read {shown}: {exc.strerror}") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise SubmissionError(f"{shown} is {_kind(st.st_mode)}: only regular files are "
+                                  "graded")
+        chunks, size = [], 0
+        while size <= limit and st.st_size <= limit:  # read one byte past the limit at most
+            chunk = os.read(fd, min(1 << 20, limit + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+    except OSError as exc:
+        raise SubmissionError(f"cannot read {shown}: {exc.strerror}") from None
+    finally:
+        os.close(fd)
+    if st.st_size > limit or size > limit:
+        raise SubmissionError(f"{shown} is larger than {_size(limit)}, the limit for a "
+                              f"{path.suffix or 'submitted'} file")
+    try:
+        return b"".join(chunks).decode("utf-8-sig")  # a BOM is not part of the text
+    except UnicodeDecodeError as exc:
+        raise SubmissionError(f"{printable(path.name)} is not a UTF-8 text file (byte "
+                              f"{exc.start} is 0x{exc.object[exc.start]:02x})") from None
+
+
+def _size(n: int) -> str:
+    return f"{n >> 20} MiB" if n >= 1 << 20 and not n % (1 << 20) else f"{n} bytes"
 
 
 @dataclass(frozen=True)
@@ -88,20 +178,11 @@ def read_source(path: Path, allowed: frozenset[str] = frozenset({"numpy"}),
     """The Python source of a ``.py`` file, or what is kept of a notebook (see the module's
     docstring); ``template`` is the assignment's file name (``a1_rotations.py``), which a
     notebook may import, and ``functions`` the names the grader calls."""
-    text = _read(path)
+    text = read_regular(path)
     if path.suffix == ".ipynb":
-        return source_from_notebook(text, path.name, allowed,
+        return source_from_notebook(text, printable(path.name), allowed,
                                     path.parent / template if template else None, functions)
     return Source(text)
-
-
-def _read(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise SubmissionError(f"{path.name} is not a UTF-8 text file") from None
-    except OSError as exc:
-        raise SubmissionError(f"cannot read {path}: {exc.strerror}") from None
 
 
 @dataclass
@@ -131,26 +212,20 @@ def source_from_notebook(text: str, name: str = "notebook",
     """The definitions of a notebook (see the module's docstring) as one source. ``paired``
     is the template file beside the notebook, graded first if the notebook imports it;
     ``functions`` are the names the grader calls (None: every function may be)."""
-    try:
-        cells = json.loads(text)["cells"]
-    except (json.JSONDecodeError, KeyError, TypeError):
-        raise SubmissionError(f"{name} is not a Jupyter notebook") from None
-    ex = _Extraction(allowed | (sys.stdlib_module_names - BLOCKED_STDLIB),
+    ex = _Extraction(allowed | ALLOWED_STDLIB,
                      paired.stem if paired else None, functions)
-    for number, cell in enumerate(cells, start=1):
-        if isinstance(cell, dict) and cell.get("cell_type") == "code":
-            src = cell.get("source", "")
-            _read_cell(ex, "".join(src) if isinstance(src, list) else str(src), number)
+    for number, src in _code_cells(text, name):
+        _read_cell(ex, src, number)
     _choose(ex)
     parts: list[str] = []
     origins: list[tuple[int, str, int]] = []
     line = 1
     if ex.imports_template:
         assert paired is not None
-        if not paired.is_file():
+        if not os.path.lexists(paired):  # a link or pipe there is refused by read_regular
             raise SubmissionError(f"{name} imports {paired.stem}, but {paired.name} is not "
                                   "beside it: submit that file (with the notebook or alone)")
-        module = _read(paired).rstrip("\n") + "\n"
+        module = read_regular(paired).rstrip("\n") + "\n"
         parts.append(module)
         origins.append((1, paired.name, 1))
         line += module.count("\n") + 1
@@ -162,6 +237,69 @@ def source_from_notebook(text: str, name: str = "notebook",
             origins.append((line, f"cell {s.cell}", s.line))
             line += s.code.count("\n") + 2
     return Source("\n".join(parts), tuple(origins), tuple(ex.notes))
+
+
+def _code_cells(text: str, name: str) -> list[tuple[int, str]]:
+    """``(number, source)`` of each code cell of a notebook's JSON, numbered among all its
+    cells; anything malformed is a :class:`SubmissionError` naming the cell."""
+    not_nb = f"{name} is not a Jupyter notebook"
+    try:
+        nb = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise SubmissionError(f"{not_nb}: its JSON is broken at line {exc.lineno}, column "
+                              f"{exc.colno} ({exc.msg})") from None
+    except RecursionError:
+        raise SubmissionError(f"{not_nb}: its JSON is nested too deeply") from None
+    except ValueError:  # an integer of more digits than Python converts
+        raise SubmissionError(f"{not_nb}: its JSON holds a number too long to read") from None
+    if not isinstance(nb, dict):
+        raise SubmissionError(f"{not_nb}: its JSON is {_json_type(nb)}, not an object with "
+                              "\"cells\"")
+    cells = nb.get("cells")
+    if not isinstance(cells, list):
+        raise SubmissionError(f"{not_nb}: its \"cells\" are {_json_type(cells)}, not a list"
+                              if "cells" in nb else f"{not_nb}: it has no \"cells\"")
+    code = []
+    for number, cell in enumerate(cells, start=1):
+        if not isinstance(cell, dict):
+            raise SubmissionError(f"{name}: cell {number} is {_json_type(cell)}, not an object "
+                                  "(is the notebook damaged?)")
+        if cell.get("cell_type") != "code":
+            continue
+        src = cell.get("source", "")
+        if isinstance(src, list) and all(isinstance(line, str) for line in src):
+            src = "".join(src)
+        elif isinstance(src, list):
+            odd = next(x for x in src if not isinstance(x, str))
+            raise SubmissionError(f"{name}: the source of cell {number} is a list holding "
+                                  f"{_json_type(odd)}, not text (a list of strings)")
+        elif not isinstance(src, str):
+            raise SubmissionError(f"{name}: the source of cell {number} is {_json_type(src)}, "
+                                  "not text (a string or a list of strings)")
+        try:
+            src.encode("utf-8")
+        except UnicodeEncodeError as exc:  # a lone surrogate, which JSON's \ud800 spells
+            raise SubmissionError(f"{name}: cell {number} holds a character that is not "
+                                  f"Unicode text ({exc.object[exc.start]!a})") from None
+        code.append((number, src))
+    return code
+
+
+def _json_type(value: object) -> str:
+    return JSON_TYPES.get(type(value), type(value).__name__)
+
+
+def _parse(code: str, filename: str = "<unknown>") -> ast.Module:
+    """``ast.parse``, with every way hostile text breaks the parser as a SyntaxError: null
+    bytes (a ValueError before Python 3.12) and nesting deeper than its stack."""
+    try:
+        return ast.parse(code, filename=filename)
+    except SyntaxError:
+        raise
+    except ValueError as exc:
+        raise SyntaxError(str(exc)) from None
+    except (RecursionError, MemoryError):
+        raise SyntaxError("nested too deeply for Python's parser") from None
 
 
 def _read_cell(ex: _Extraction, src: str, number: int) -> None:
@@ -177,11 +315,11 @@ def _read_cell(ex: _Extraction, src: str, number: int) -> None:
         lines, offset = lines[1:], 1
     code = "\n".join(lines)
     try:
-        tree = ast.parse(code)
+        tree = _parse(code)
     except SyntaxError:
         code = "\n".join("" if _ipython_line(ln) else ln for ln in lines)
         try:
-            tree = ast.parse(code)
+            tree = _parse(code)
         except SyntaxError as exc:
             if not why:
                 ex.notes.append(f"cell {number} was skipped: it does not parse (line "
@@ -388,10 +526,10 @@ def import_problems(source: Source | str, allowed: frozenset[str], filename: str
     if isinstance(source, str):
         source = Source(source)
     try:
-        tree = ast.parse(source.text, filename=filename)
+        tree = _parse(source.text, filename)
     except SyntaxError as exc:
         return [f"{source.locate(exc.lineno or 1)}: {exc.msg} (Python cannot read the file)"]
-    ok = (sys.stdlib_module_names - BLOCKED_STDLIB) | allowed
+    ok = ALLOWED_STDLIB | allowed
     problems = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):

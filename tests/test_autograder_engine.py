@@ -108,8 +108,8 @@ def test_static_check_names_the_line_and_the_reason():
     assert problems == [
         "line 3: `from scipy.spatial import ...` is not allowed: the assignment asks you to "
         "implement the math yourself with numpy",
-        "line 4: `import subprocess` is not allowed: use numpy and the Python standard "
-        "library only",
+        "line 4: `import subprocess` is not allowed: the grader runs no native code, other "
+        "programs or other interpreters: use numpy and the Python standard library only",
     ]
     assert import_problems("def f(:\n", frozenset(), "s.py")[0].startswith("line 1:")
 

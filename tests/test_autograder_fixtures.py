@@ -135,6 +135,9 @@ ADVERSARIAL = {
                                     "(JSON nested too deeply)"]),
     "adv_garbage_bytes.py": (10, ["while quat_mul ran, something else wrote to the grader's "
                                   "private result channel; this test scores 0 (not JSON"]),
+    "adv_tcl_exec.py": (10, ["quat_mul raised RuntimeError: reached ['tkinter: ImportError', "
+                             "'_tkinter: ImportError']"]),
+    "adv_huge_answer.py": (10, ["far more numbers than the 80 that could make sense here"]),
 }
 # The portable level (Windows) has no memory limit: the bomb's 32 GiB would really be filled.
 PORTABLE_HOSTILE = sorted(set(ADVERSARIAL) - {"adv_memory_bomb.py"})

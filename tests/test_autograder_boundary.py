@@ -1,0 +1,106 @@
+"""The kernel boundary of the bubblewrap sandbox, attacked as if the audit hook were already
+defeated: raw code in the sandbox's place, and the seccomp filter on its own. Each attack
+records what it reached; the tests assert it reached nothing."""
+
+from __future__ import annotations
+
+import ctypes
+import errno
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+from test_autograder_fixtures import REPO
+
+from autograder import seccomp
+from autograder.sandbox import INSIDE, SANDBOX_UID, Limits, Sandbox, isolation
+
+BUBBLEWRAP = pytest.mark.skipif(isolation() != "bubblewrap",
+                                reason="no bubblewrap sandbox on this machine")
+ATTACK = Path(__file__).parent / "attacks" / "raw_escape.py"
+
+
+@BUBBLEWRAP
+def test_with_the_hook_defeated_the_kernel_gives_nothing(tmp_path):
+    """The escapes of the security review, run as plain Python with no audit hook: no host
+    file, no chroot escape, no process, no signal to the grader, the disk and memory limits
+    hold, and no module that runs native code or another program exists."""
+    secret = tmp_path / "grades.csv"
+    secret.write_text("alice,24\n")
+    targets = [str(REPO / "tests/fixtures/a1/reference.py"), "/etc/shadow", "/etc/passwd",
+               "/proc/1/cmdline", "/proc/self/status", str(secret), "/root/.bashrc",
+               sys.executable, "/usr/bin/python3"]
+    limits = Limits(memory_mb=512, disk_mb=8)
+    with Sandbox(ATTACK.read_text(), [], limits, frozenset(), level="bubblewrap") as box:
+        config = {"cwd": f"{INSIDE}/work", "limits": {"memory_mb": 512, "cpu_seconds": 30,
+                                                      "file_mb": 8, "tasks": 32}}
+        proc = box.spawn(config, ["-I", "-S", f"{INSIDE}/work/submission.py", str(os.getpid()),
+                                  *targets], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err.decode()
+    reached = json.loads(out)
+    assert reached["read"] == []
+    assert reached["listed_root"] == ["dev", "lib64", "sandbox"]
+    assert reached["uid"] == [SANDBOX_UID, SANDBOX_UID]
+    for attempt in ("chroot", "fork", "posix_spawn"):
+        assert reached[attempt] == "refused: Operation not permitted", attempt
+    assert reached["setuid0"] == "refused: Invalid argument"  # no uid 0 in its namespace
+    assert reached["signal_grader"] == "refused: No such process"  # not even visible
+    assert reached["exec_shell"] == "refused: No such file or directory"
+    assert reached["disk_full"] == "No space left on device"
+    assert reached["disk_written_mb"] <= limits.disk_mb
+    assert reached["memory_mb"] <= limits.memory_mb
+    assert reached["threads"] < 32  # RLIMIT_NPROC in its own user namespace
+    assert "native_modules" not in reached
+
+
+FILTERED = ["fork", "vfork", "mount", "umount2", "chroot", "pivot_root", "unshare", "setns",
+            "ptrace", "process_vm_readv", "process_vm_writev", "bpf", "perf_event_open",
+            "keyctl", "add_key", "userfaultfd", "io_uring_setup", "init_module", "kexec_load",
+            "open_by_handle_at", "fsopen", "move_mount"]
+
+
+@pytest.mark.skipif(not seccomp.available() or sys.platform != "linux",
+                    reason="no libseccomp on this machine")
+def test_the_seccomp_filter_refuses_every_listed_call_and_keeps_threads():
+    """The filter installed in a throwaway process (native calls through ctypes, as an
+    attacker with code execution would make them): every listed call is refused, sockets
+    too but AF_UNIX, a non-thread clone too, and clone3 says ENOSYS so threads still start."""
+    program = seccomp.program()
+    probe = textwrap.dedent(f"""
+        import ctypes, json, os, socket, threading
+        libc = ctypes.CDLL(None, use_errno=True)
+        lib = ctypes.CDLL("libseccomp.so.2")
+        nr = lambda n: lib.seccomp_syscall_resolve_name(n.encode())
+        prog = bytes.fromhex({program.hex()!r})
+        class Fprog(ctypes.Structure):
+            _fields_ = [("len", ctypes.c_ushort), ("filter", ctypes.c_char_p)]
+        fprog = Fprog(len(prog) // 8, prog)
+        assert libc.prctl(38, 1, 0, 0, 0) == 0  # PR_SET_NO_NEW_PRIVS
+        assert libc.prctl(22, 2, ctypes.byref(fprog), 0, 0) == 0  # SECCOMP_MODE_FILTER
+        def errno_of(*args):
+            ctypes.set_errno(0)
+            rc = libc.syscall(*args)
+            return ctypes.get_errno() if rc == -1 else "allowed"
+        found = {{n: errno_of(nr(n), 0, 0, 0, 0, 0) for n in {FILTERED!r}}}
+        found["clone"] = errno_of(nr("clone"), 17, 0, 0, 0, 0)  # SIGCHLD: a new process
+        found["clone3"] = errno_of(nr("clone3"), 0, 0)
+        found["socket_inet"] = errno_of(nr("socket"), socket.AF_INET, socket.SOCK_STREAM, 0)
+        found["socket_unix"] = errno_of(nr("socket"), socket.AF_UNIX, socket.SOCK_STREAM, 0)
+        t = threading.Thread(target=lambda: None); t.start(); t.join()
+        found["thread"] = "started"
+        print(json.dumps(found))
+    """)
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         timeout=60)
+    assert out.returncode == 0, out.stderr
+    found = json.loads(out.stdout)
+    for name in [*FILTERED, "clone", "socket_inet"]:
+        assert found[name] == errno.EPERM, name
+    assert found["clone3"] == errno.ENOSYS
+    assert found["socket_unix"] == "allowed" and found["thread"] == "started"
+    assert ctypes  # the test itself may use ctypes; the sandbox never loads it
