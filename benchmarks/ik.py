@@ -33,6 +33,7 @@ IDENT = np.tile([1.0, 0, 0, 0], (8, 1))
 TOL = 1e-4
 N_TARGETS = 200
 REPEATS = 3
+BATCHES = (1, 10, 100)  # small batch sizes set beside single solves
 # (method, joint model, goal as a speed-up over ikpy or None)
 ROWS = [
     ("dls", "hinge", 25),
@@ -97,6 +98,21 @@ def time_method(method: str, sk, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return np.array(times), np.array(its), ok / len(ts)
 
 
+def time_batch(method: str, sk, ts: np.ndarray) -> tuple[float, float]:
+    """Best of ``REPEATS`` times of solving all ``ts`` one by one, and as one batch (timed
+    alternately, so that both see the same load)."""
+    best = [np.inf, np.inf]
+    for _ in range(REPEATS):
+        t0 = time.perf_counter()
+        for t in ts:
+            solve(sk, IDENT, np.zeros(3), {"end_effector": t}, method=method, tol=TOL)
+        t1 = time.perf_counter()
+        solve(sk, IDENT, np.zeros(3), {"end_effector": ts}, method=method, tol=TOL)
+        t2 = time.perf_counter()
+        best = [min(best[0], t1 - t0), min(best[1], t2 - t1)]
+    return best[0], best[1]
+
+
 def main() -> None:
     ts = targets(N_TARGETS)
     ik_times, ik_ok = time_ikpy(ts)
@@ -114,6 +130,17 @@ def main() -> None:
         verdict = "" if goal is None else f">= {goal}x: {'met' if ratio >= goal else 'MISSED'}"
         print(f"{method:20s} {joints:6s} {med:9.3f} {np.percentile(tm, 90)*1e3:7.3f} "
               f"{np.median(its):6.0f} {ok:8.0%} {ratio:7.1f}  {verdict}")
+
+    # Small batches against the same solves one by one (goal: a ratio <= 1 everywhere).
+    print(f"\nbatch of B vs the same B solves one by one, ms per solve: singles | batch "
+          f"(batch / singles; goal <= 1), each the best of {REPEATS}")
+    print(f"{'method':20s} {'joints':6s} " + " ".join(f"{f'B={B}':>24s}" for B in BATCHES))
+    for method, joints, _ in ROWS:
+        cells = []
+        for B in BATCHES:
+            one, batch = (t / B for t in time_batch(method, SKELETONS[joints], ts[:B]))
+            cells.append(f"{one * 1e3:6.3f} | {batch * 1e3:6.3f} ({batch / one:4.2f}x)")
+        print(f"{method:20s} {joints:6s} " + " ".join(f"{c:>24s}" for c in cells))
 
     B = 10_000
     big = targets(B, seed=1)

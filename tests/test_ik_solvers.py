@@ -320,6 +320,7 @@ def test_fast_serial_path_agrees_with_general_model(method, sk, lim, options, mo
     start = IDENT.copy()
     start[:7] = quat_from_axis_angle(AXES, np.full(7, options.pop("start", 0.0)))
     runs = {}
+    _array_engine(monkeypatch)
     for fast in (True, False):
         monkeypatch.setattr(api, "_FAST_PATH", fast)
         one = [solve(sk, start, np.zeros(3), {"end_effector": t}, method=method, limits=lim,
@@ -339,6 +340,14 @@ def test_fast_serial_path_agrees_with_general_model(method, sk, lim, options, mo
         elif lim is BALL_LIMITS:
             half = np.linalg.norm(f.local_rotations[:7, 1:], axis=1)
             assert np.all(2 * np.arcsin(np.minimum(half, 1)) <= 0.6 + 1e-9)
+
+
+def _array_engine(monkeypatch) -> None:
+    """Small batches on the fast path solve one problem at a time; these tests compare the
+    array engine (every component an ndarray (B,)) with single solves, so force it."""
+    import course.ik.api as api
+
+    monkeypatch.setattr(api, "_BATCH_FROM", dict.fromkeys(api._BATCH_FROM, 0))
 
 
 def _hinge_angles(local: np.ndarray) -> np.ndarray:
@@ -395,6 +404,7 @@ def test_straight_chain_target_on_its_line(method, fast, monkeypatch):
     import course.ik.api as api
 
     monkeypatch.setattr(api, "_FAST_PATH", fast)
+    _array_engine(monkeypatch)
     sk = chain([1.0, 0.5, 2.0, 0.7])
     ident = np.tile(IDENT[0], (5, 1))
     targets = np.array([[2.5, 0, 0], [1.5, 0, 0], [-2.0, 0, 0], [0.8, 0, 0]])
@@ -441,6 +451,7 @@ def test_result_of_one_problem_and_of_a_batch(method, fast, monkeypatch):
     import course.ik.api as api
 
     monkeypatch.setattr(api, "_FAST_PATH", fast)
+    _array_engine(monkeypatch)
     sk = BALL if method == "fabrik" else HINGE
     targets = np.vstack([_reachable_targets(3, seed=19), [[9.0, 1.0, 0.0]]])
     kw = dict(method=method, max_iter=25)

@@ -107,8 +107,8 @@ class ChainModel:
         self.reach_far = on_path @ lengths
         longest = (on_path * lengths).max(axis=1, initial=0.0)
         self.reach_near = np.maximum(0.0, 2 * longest - self.reach_far)
-        # Rounding slack of the reach test, relative to the longest path.
-        self.reach_slack = 1e-9 * max(float(self.reach_far.max(initial=0.0)), 1.0)
+        # Rounding slack of the reach test, relative to the longest path (of any size).
+        self.reach_slack = 1e-9 * float(self.reach_far.max(initial=0.0))
         # The solve's length scale: its longest path to any effector (orientation targets
         # included), floored so a chain of zero bones still has one.
         to_any = self.descendant[:, np.concatenate([self.effectors, self.rot_effectors])].T
@@ -489,6 +489,29 @@ class Problem:
         delta = np.where(need.any(axis=1)[:, None], delta, 0.0)
         return self.project(m.step(Rn, M, self.base, delta))
 
+    def stretch_if_far(self, Rn: Array, tol: float) -> Array:
+        """Edge rotations of a serial chain of free ball joints stretched straight at its
+        target (:meth:`fit_free`, every bone keeping its twist) in the problems whose target
+        lies at or beyond the reach (distance at least the sum of the bones less ``tol``) and
+        is not yet reached; the others unchanged.
+
+        Why: there the stretched pose is the answer (within ``tol``) or the best pose, and
+        no iterative method gets there in time: near the straight pose the error is flat (it
+        changes with the square of the bend), so CCD, FABRIK and the Jacobian methods crawl
+        (at exactly full reach they stopped 4e-4 to 2e-2 away). The caller checks the chain.
+        """
+        m = self.model
+        to_t = self.target_pos[:, 0] - self.p0
+        d = norm(to_t)
+        _, p = self.forward(Rn)
+        need = ((d >= m.reach_far[0] - tol) & (d > 0)
+                & (norm(self.target_pos[:, 0] - p[:, m.effectors[0]]) >= tol))
+        if not need.any():
+            return Rn
+        u = to_t / np.where(need, d, 1.0)[:, None]
+        straight = self.p0[:, None] + np.cumsum(norm(m.bone))[:, None] * u[:, None]
+        return np.where(need[:, None, None, None], self.fit_free(Rn, straight), Rn)
+
     def project(self, Rn: Array) -> Array:
         """Edge rotations with every variable projected into its limits."""
         m = self.model
@@ -498,7 +521,7 @@ class Problem:
         Rn[:, m.var_nodes] = self._limit(Rn[:, m.var_nodes], np.arange(len(m.var_nodes)))
         return Rn
 
-    def fit(self, Rn: Array, wanted: Array) -> Array:
+    def fit(self, Rn: Array, wanted: Array, subtree: bool = True) -> Array:
         r"""Edge rotations that put the path nodes as close as possible to ``wanted`` positions.
 
         Walks the levels from the fixed joint out. At each node the orientation carried over
@@ -507,7 +530,9 @@ class Problem:
         ones: the shortest arc for one offset (so the bone keeps its previous twist), Kabsch
         for several (a branching joint). A hinge cannot aim a bone at a point off its plane:
         it takes the turn about its axis that brings every node it moves (the whole subtree,
-        not only its child) closest to the wanted positions, least squares.
+        not only its child) closest to the wanted positions, least squares; with
+        ``subtree=False`` the nodes it places alone (the two-link solution's points are exact,
+        and a turn that also weighs the end would leave the middle joint off its point).
         Hinge ranges and ball limits are enforced on the way, so later levels see the
         constrained pose.
 
@@ -515,6 +540,8 @@ class Problem:
         ----------
         Rn : ndarray, shape (B, N, 3, 3)
         wanted : ndarray, shape (B, N, 3)
+        subtree : bool
+            A hinge fits every node it moves (FABRIK), or only the ones it places.
 
         Returns
         -------
@@ -528,7 +555,7 @@ class Problem:
         up = m.up
         F = Rn.copy()
         F[:, up] = np.swapaxes(Rn[:, up], -1, -2)
-        if m.hinge.any():  # the starting pose: where each hinge's subtree hangs in its frame
+        if subtree and m.hinge.any():  # the start: where each hinge's subtree hangs in its frame
             M_old, p_old = self.forward(Rn)
         M = np.empty_like(Rn)
         p = np.empty((B, m.n_nodes, 3))
@@ -554,13 +581,17 @@ class Problem:
                     frame = np.where(up[nodes][:, None, None], Mv, Mpar[:, sel])
                     axis = matvec(frame, self._axes()[v])  # (B, n, 3)
                     a = axis[:, :, None]
-                    # The moved nodes' offsets from the pivot, in the node's frame (constant
-                    # while it turns), carried by its new orientation; and where they are wanted.
-                    moved, piv = m.moved_nodes[nodes], m.pivot[nodes]
-                    to_new = Mv @ np.swapaxes(M_old[:, nodes], -1, -2)
-                    h_cur = matvec(to_new[:, :, None], p_old[:, moved] - p_old[:, piv][:, :, None])
-                    h_want = wanted[:, moved] - p[:, piv][:, :, None]
-                    h_wt = m.moved_weight[nodes]
+                    if subtree:
+                        # The moved nodes' offsets from the pivot, in the node's frame (constant
+                        # while it turns), carried by its new orientation; where they are wanted.
+                        moved, piv = m.moved_nodes[nodes], m.pivot[nodes]
+                        to_new = Mv @ np.swapaxes(M_old[:, nodes], -1, -2)
+                        h_cur = matvec(to_new[:, :, None],
+                                       p_old[:, moved] - p_old[:, piv][:, :, None])
+                        h_want = wanted[:, moved] - p[:, piv][:, :, None]
+                        h_wt = m.moved_weight[nodes]
+                    else:
+                        h_cur, h_want, h_wt = cur, want, wt
                     flat = h_cur - dot(h_cur, a)[..., None] * a
                     num = (dot(a, cross(flat, h_want)) * h_wt).sum(-1)
                     den = (dot(flat, h_want) * h_wt).sum(-1)

@@ -314,6 +314,26 @@ class SerialChain:
             R = self.project(R, limits, ops)
         return (R, *self.forward(R, base, p0))
 
+    def stretch_if_far(self, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
+                       ops: Any) -> list[Quat]:
+        """As :meth:`course.ik._chains.Problem.stretch_if_far`, for a chain of free balls:
+        ``R`` stretched straight at a target at or beyond the reach (:func:`fit_chain`);
+        unchanged where the target is nearer or already reached."""
+        far = self.reach[0]
+        to_t = sub(target, p0)
+        d = ops.sqrt(dot(to_t, to_t))
+        need = ops.both(d >= far - tol, d > 0.0)
+        if not ops.any(need):  # the usual case: the target well inside the reach
+            return R
+        Q, P = self.forward(R, base, p0)
+        need = ops.both(need, ops.dist(P[-1], target) >= tol)
+        u = scale(to_t, 1.0 / ops.where(need, d, 1.0))
+        straight, reach = [p0], 0.0
+        for bone in self.bones[1:]:
+            reach += math.sqrt(dot(bone, bone))
+            straight.append(add(p0, scale(u, reach)))
+        return ops.select(need, fit_chain(self, R, Q, P, base, straight, ops)[0], R)
+
     def unreachable(self, target: Vec, p0: Vec, ops: Any) -> Any:
         """Whether the target lies outside the shell the effector can reach from ``p0``."""
         e = sub(target, p0)

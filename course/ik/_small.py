@@ -72,7 +72,8 @@ def arc_matrix(u: Array, v: Array) -> Array:
     s = norm(c)
     d = dot(u, v)
     angle = np.arctan2(s, d)
-    axis = c / np.where(s > TINY, s, 1.0)[..., None]
+    # Normalised wherever it is not zero: the angle is exact at any length (bones of 1e-8).
+    axis = c / np.where(s > 0, s, 1.0)[..., None]
     nu = norm(u)
     opposite = (s <= TINY * np.maximum(nu * norm(v), TINY)) & (d < 0)
     if np.any(opposite):

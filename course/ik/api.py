@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from course import fk
 from course.rotations import matrix_from_quat, quat_from_matrix
-from course.rotations._checks import as_array
+from course.rotations._checks import as_array, broadcast_leading
 
 from . import ccd, fabrik, jacobian
 from ._chains import ChainModel, Problem, build_model
@@ -27,7 +27,16 @@ from ._serial import (
     solve_jacobian,
     units_like,
 )
-from ._small import TINY, best_rotation, cross, dot, matvec, norm, orthonormalize
+from ._small import (
+    TINY,
+    best_rotation,
+    cross,
+    dot,
+    matvec,
+    norm,
+    orthonormalize,
+    rotvec_matrix,
+)
 from .result import History, IKResult, Target
 from .two_link import two_link
 
@@ -95,14 +104,15 @@ def solve(
     weights : mapping joint -> float, optional
         Jacobian methods: the regulariser :math:`W` (larger: the joint moves less).
     limits : mapping joint -> (lo, hi) or float, optional
-        Hinge angle range in radians, or the largest rotation angle of a ball joint's local
+        Hinge angle range in radians (one angle ``a``: the range ``(-a, a)``), or the
+        largest rotation angle of a ball joint's local
         rotation (swing and twist together: the bone stays in a cone of that half-angle about
         its rest direction, and its twist is capped as well). Enforced by projection after
         each step (CCD, Jacobian) or joint placement (FABRIK, two-link).
     record : bool
         Keep every iteration's pose in ``result.frames``.
     **options
-        ``damping`` (DLS :math:`\lambda`, a finite length >= 0), ``rcond`` (pseudo-inverse
+        ``damping`` (DLS :math:`\lambda`, a length in [0, 1e50]), ``rcond`` (pseudo-inverse
         cutoff, in [0, 1)), ``max_step`` (largest joint step per Jacobian iteration, radians,
         > 0), ``tip_to_root`` and ``max_angle`` (CCD: the largest turn per joint and step,
         radians, > 0), ``pole`` (a world point) and ``flip`` (two-link).
@@ -115,8 +125,10 @@ def solve(
     ------
     ValueError
         Naming the argument: unknown method, joint or option; an option value, ``tol`` or
-        ``max_iter`` out of range; non-finite or badly shaped input, a zero quaternion; a
-        two-link solve whose path is not two bones.
+        ``max_iter`` out of range; non-finite, huge (beyond :data:`LARGEST_COORDINATE`) or
+        badly shaped input, a zero quaternion; a hinge whose start rotation is off its axis;
+        an effector no joint on its path can move; a two-link solve whose path is not two
+        bones.
     """
     if method not in METHODS:
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
@@ -130,15 +142,20 @@ def solve(
     elif (isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer)
           or max_iter < 0):
         raise ValueError(f"max_iter: expected a whole number >= 0, got {max_iter!r}")
+    if not all(hasattr(skeleton, a) for a in ("n_joints", "parents", "offsets", "joint_types",
+                                                "index")):
+        raise ValueError(f"skeleton: expected a course.skeleton.Skeleton, got "
+                         f"{type(skeleton).__name__}")
     J = skeleton.n_joints
     local = as_array(local_rotations, "local_rotations", (4,))
     if local.ndim not in (2, 3) or local.shape[-2] != J:
         raise ValueError(f"local_rotations: expected shape ([B,] {J}, 4), got {local.shape}")
-    qn2 = (local * local).sum(-1)
-    if qn2.min() < 1e-24:
+    big = np.abs(local).max(-1, keepdims=True)  # scaled first: the squares of 1e155 overflow
+    qn = big * np.linalg.norm(local / np.where(big > 0, big, 1.0), axis=-1, keepdims=True)
+    if qn.min() < 1e-12:
         raise ValueError("local_rotations: contains a zero quaternion, which is no rotation")
-    local = local / np.sqrt(qn2)[..., None]
-    root_pos = as_array(root_position, "root_position", (3,))
+    local = local / qn
+    root_pos = _position(root_position, "root_position")
     if root_pos.ndim > 2:
         raise ValueError(f"root_position: expected shape ([B,] 3), got {root_pos.shape}")
     k = 0 if root is None else skeleton.index(root)
@@ -150,8 +167,11 @@ def solve(
         j = skeleton.index(key)
         name = f"targets[{key!r}]"
         position, orientation = _split_target(value)
+        if position is None and orientation is None:
+            raise ValueError(f"{name}: expected a position (3,) or ([B,] 3), a pair (position, "
+                             f"quaternion) or a Target, got {value!r}")
         if position is not None:
-            pos_t[j] = as_array(position, f"{name} position", (3,))
+            pos_t[j] = _position(position, f"{name} position")
         if orientation is not None:
             q = as_array(orientation, f"{name} orientation", (4,))
             if np.min(np.einsum("...i,...i->...", q, q)) < 1e-24:
@@ -162,24 +182,33 @@ def solve(
     if k in pos_t or k in rot_t:
         raise ValueError(f"root: joint {skeleton.names[k]!r} is fixed, it cannot also be a target")
 
-    leading = [local.shape[:-2], root_pos.shape[:-1]]
-    leading += [a.shape[:-1] for a in (*pos_t.values(), *rot_t.values())]
-    shape = np.broadcast_shapes(*leading) if any(leading) else ()
+    shape = broadcast_leading(
+        "targets", ("local_rotations", local, 2), ("root_position", root_pos, 1),
+        *((f"targets[{skeleton.names[j]!r}] position", a, 1) for j, a in pos_t.items()),
+        *((f"targets[{skeleton.names[j]!r}] orientation", a, 1) for j, a in rot_t.items()))
     if len(shape) > 1:
         raise ValueError(f"targets: leading shapes {shape} do not broadcast to one batch axis")
     batched = len(shape) == 1
     B = shape[0] if batched else 1
 
     model, serial = _model(skeleton, k, tuple(pos_t), tuple(rot_t))
+    _check_movable(skeleton, model, k)
+    _check_hinges(skeleton, model, local)
     col_weight = _weights(skeleton, model, weights)
     max_iter = int(max_iter)
     if _FAST_PATH and serial is not None and method != "two_link":
-        (j,) = pos_t
-        return _result(*_solve_serial(
-            skeleton, serial, model, local, root_pos, k, pos_t[j], B, batched, method, tol,
-            max_iter, col_weight,
-            serial.limits(*_limits(skeleton, model, limits)) if limits else [], record,
-            **options), method)
+        (target,) = pos_t.values()
+        lims = serial.limits(*_limits(skeleton, model, limits)) if limits else []
+        if not batched or B >= _batch_from(method, serial, lims):
+            return _result(*_solve_serial(
+                skeleton, serial, model, local, root_pos, k, target, B, batched, method, tol,
+                max_iter, col_weight, lims, record, **options), method)
+        # A small batch: one problem at a time in floats is faster (see _BATCH_FROM).
+        rows = zip(np.broadcast_to(local, (B, J, 4)), np.broadcast_to(root_pos, (B, 3)),
+                   np.broadcast_to(target, (B, 3)), strict=True)
+        return _stack([_result(*_solve_serial(
+            skeleton, serial, model, q, r, k, t, 1, False, method, tol, max_iter, col_weight,
+            lims, record, **options), method) for q, r, t in rows])
     hinge_limits, ball_limit = _limits(skeleton, model, limits)
 
     local_b = np.broadcast_to(local, (B, J, 4)).copy()
@@ -205,6 +234,8 @@ def solve(
     )
     problem.Rn = problem.project(problem.Rn)
     if method != "two_link":
+        if serial is not None and serial.free_balls and not limits:
+            problem.Rn = problem.stretch_if_far(problem.Rn, tol)
         problem.Rn = problem.bend_if_straight(problem.Rn, tol)
 
     if method == "two_link":
@@ -236,6 +267,48 @@ def solve(
     return _result(*pose, history, unreachable, recorded if record else None, method)
 
 
+# Batches on the serial fast path smaller than this solve one problem at a time in Python
+# floats: the array engine pays a numpy call per component and step (~1 us, against ~50 ns
+# for a float), and for as many iterations as the batch's slowest problem needs. Crossovers
+# measured on the 7-bone chains of benchmarks/ik.py; the transpose method's slowest problems
+# take thousands of iterations, so its batches are never faster than its single solves.
+_BATCH_FROM = {"ccd": 256, "fabrik": 256, "fabrik_points": 64, "jacobian_transpose": math.inf,
+               "pseudo_inverse": 48, "dls": 48}
+
+
+def _batch_from(method: str, serial: SerialChain, limits: list) -> float:
+    """The smallest batch the array engine solves faster than a loop of single solves
+    (FABRIK on free balls iterates on points alone, a cheaper engine)."""
+    if method == "fabrik" and serial.free_balls and not limits:
+        return _BATCH_FROM["fabrik_points"]
+    return _BATCH_FROM[method]
+
+
+def _stack(results: list[IKResult]) -> IKResult:
+    """One batch result from single ones: arrays (B, ...), residuals (T, B) and frames with
+    every problem held at its last entry once it has stopped (as the array engine does)."""
+    residuals = np.empty((max(len(r.residuals) for r in results), len(results)))
+    for i, r in enumerate(results):
+        residuals[:len(r.residuals), i] = r.residuals
+        residuals[len(r.residuals):, i] = r.error
+    frames = None
+    if results[0].frames is not None:
+        F = max(len(r.frames) for r in results)
+        frames = [{key: np.stack([r.frames[min(t, len(r.frames) - 1)][key] for r in results])
+                   for key in ("positions", "local_rotations")} for t in range(F)]
+    return IKResult(
+        local_rotations=np.stack([r.local_rotations for r in results]),
+        root_position=np.stack([r.root_position for r in results]),
+        positions=np.stack([r.positions for r in results]),
+        converged=np.array([r.converged for r in results]),
+        iterations=np.array([r.iterations for r in results]),
+        residuals=residuals,
+        reason=np.array([r.reason for r in results], dtype="<U14"),
+        method=results[0].method,
+        frames=frames,
+    )
+
+
 # The options each method takes, and the values they accept: (test, what it must be).
 OPTIONS: dict[str, dict[str, tuple[Any, str]]] = {
     "two_link": {"pole": (None, ""), "flip": (None, "")},
@@ -243,7 +316,8 @@ OPTIONS: dict[str, dict[str, tuple[Any, str]]] = {
             "max_angle": (lambda x: x > 0, "a positive angle in radians (inf: no cap)")},
     "fabrik": {},
     **dict.fromkeys(jacobian.METHODS, {
-        "damping": (lambda x: x >= 0 and math.isfinite(x), "a finite length >= 0"),
+        # Its sixth power is a determinant in the closed-form step: beyond 1e50 it overflows.
+        "damping": (lambda x: 0 <= x <= 1e50, "a length in [0, 1e50]"),
         "rcond": (lambda x: 0 <= x < 1, "a number in [0, 1)"),
         "max_step": (lambda x: x > 0, "a positive angle in radians (inf: no cap)"),
     }),
@@ -336,13 +410,60 @@ def _model_by_value(skeleton: Any, root: int, eff: tuple,
                          root, eff, reff)
 
 
+def _check_movable(skeleton: Any, model: ChainModel, root: int) -> None:
+    """``ValueError`` naming an effector that no joint between it and the fixed joint can
+    move (all fixed, or only its own rotation free, which turns it in place)."""
+    stuck = [e for nodes, mask in ((model.effectors, model.pos_mask),
+                                   (model.rot_effectors, model.rot_mask))
+             for e, row in zip(nodes, mask, strict=True) if not row.any()]
+    if stuck:
+        name = skeleton.names[int(model.joints[stuck[0]])]
+        raise ValueError(
+            f"targets[{name!r}]: no joint between it and the fixed joint "
+            f"{skeleton.names[root]!r} can move it (they are Fixed, or turn it in place); "
+            "free one of them or choose another root")
+
+
+# Positions beyond this size cannot be solved in double precision: squared distances and the
+# solvers' products of errors overflow (a target of 1e155 gave an infinite residual).
+LARGEST_COORDINATE = 1e100
+
+
+def _position(x: Any, name: str) -> Array:
+    """A position ``([B,] 3)`` checked by ``as_array`` and refused beyond
+    :data:`LARGEST_COORDINATE`."""
+    a = as_array(x, name, (3,))
+    if a.size and np.abs(a).max() > LARGEST_COORDINATE:
+        raise ValueError(f"{name}: coordinates up to {LARGEST_COORDINATE:g} can be solved "
+                         f"(their squares must not overflow), got {np.abs(a).max():g}")
+    return a
+
+
+def _check_hinges(skeleton: Any, model: ChainModel, local: Array) -> None:
+    """``ValueError`` naming a hinge the solve moves whose start rotation is not a turn about
+    its own axis (a hinge solve keeps the off-axis part, so the answer would depend on how
+    the problem was batched)."""
+    for v in np.flatnonzero(model.hinge):
+        j = int(model.edge_joint[model.var_nodes[v]])
+        axis = np.asarray(skeleton.joint_types[j].axis)
+        vec = local[..., j, 1:]
+        off = np.linalg.norm(vec - (vec @ axis)[..., None] * axis, axis=-1)
+        if off.max() > 1e-6:
+            where = f" (problem {int(np.argmax(off))})" if off.ndim else ""
+            raise ValueError(
+                f"local_rotations: joint {skeleton.names[j]!r} is a hinge about {axis.tolist()} "
+                f"but its start rotation{where} turns "
+                f"{2 * np.arcsin(min(1.0, float(off.max()))):.3g} rad about another axis; "
+                "give a turn about the hinge axis (quat_from_axis_angle(axis, angle))")
+
+
 def _weights(skeleton: Any, model: ChainModel, weights: Mapping | None) -> Array:
     if not weights:
         return model.unit_weights
     w = np.ones(model.n_cols)
     for key, value in (weights or {}).items():
         j = skeleton.index(key)
-        if not (np.isfinite(value) and value > 0):
+        if not (_is_number(value) and math.isfinite(value) and value > 0):
             raise ValueError(f"weights[{key!r}]: expected a positive number, got {value!r}")
         w[model.edge_joint[model.var_nodes[model.col_var]] == j] = value
     return w
@@ -357,16 +478,22 @@ def _limits(skeleton: Any, m: ChainModel, limits: Mapping | None) -> tuple[Array
         j = skeleton.index(key)
         hinge = getattr(skeleton.joint_types[j], "axis", None) is not None
         v = np.flatnonzero(var_joint == j)
+        a = np.asarray(value) if not isinstance(value, str) else None
+        ok = a is not None and a.dtype.kind in "iuf" and not np.isnan(a).any()
         if hinge:
-            lo, hi = (float(x) for x in np.broadcast_to(np.asarray(value, float), (2,)))
+            if not (ok and a.shape in ((), (2,))):
+                raise ValueError(f"limits[{key!r}]: a hinge takes a range (lo, hi) or one angle "
+                                 f"a >= 0 for (-a, a), radians, got {value!r}")
+            lo, hi = (-float(a), float(a)) if a.ndim == 0 else (float(a[0]), float(a[1]))
             if not lo <= hi:
-                raise ValueError(f"limits[{key!r}]: a hinge range needs lo <= hi, got {value!r}")
+                raise ValueError(f"limits[{key!r}]: a hinge range needs lo <= hi (one angle: "
+                                 f">= 0), got {value!r}")
             hinge_limits[v] = (lo, hi)
         else:
-            if np.ndim(value) != 0 or not value >= 0:
+            if not (ok and a.ndim == 0 and a >= 0):
                 raise ValueError(f"limits[{key!r}]: a ball joint takes one largest angle "
                                  f"(radians, >= 0), got {value!r}")
-            ball_limit[v] = float(value)
+            ball_limit[v] = float(a)
     return hinge_limits, ball_limit
 
 
@@ -398,6 +525,10 @@ def _pose(skeleton: Any, model: ChainModel, local: Array, root_pos: Array, Qk: A
 
 def _two_link(problem: Problem, tol: float, record: bool, pole: ArrayLike | None = None,
               flip: bool = False) -> tuple[Array, History, list[Array]]:
+    """The analytic two-bone solve; a start already within ``tol`` is kept (0 iterations),
+    and a target the joints cannot reach (out of reach, off a hinge's plane) ends in their
+    closest pose, reported ``"unreachable"`` or ``"stalled"`` (never ``"max_iterations"``:
+    there is nothing to iterate)."""
     m = problem.model
     if m.n_nodes != 3 or len(m.effectors) != 1 or m.effectors[0] != 2:
         raise ValueError(
@@ -408,14 +539,80 @@ def _two_link(problem: Problem, tol: float, record: bool, pole: ArrayLike | None
     t = problem.target_pos[:, 0]
     hip = np.flatnonzero(m.var_nodes == 0)
     knee = np.flatnonzero(m.var_nodes == 1)
-    if not m.up.any() and len(hip) and len(knee) and not m.hinge[hip[0]] and m.hinge[knee[0]]:
-        Rn, b, c = _two_link_hinge_knee(problem, M, p, t, problem._axes()[knee[0]], pole, flip)
+    axes = problem._axes()
+    both = bool(not m.up.any() and len(hip) and len(knee))
+    if both and m.hinge[hip[0]]:
+        Rn = _two_link_hinge_hip(problem, p, t, axes[hip[0]],
+                                 axes[knee[0]] if m.hinge[knee[0]] else None, pole, flip)
+        b = problem.forward(Rn)[1][:, 1]
+    elif both and m.hinge[knee[0]]:
+        Rn, b, _ = _two_link_hinge_knee(problem, M, p, t, axes[knee[0]], pole, flip)
     else:
         Rn = problem.Rn
-        b, c, _ = two_link(p[:, 0], p[:, 1], p[:, 2], t, pole, flip)
-    Rn = problem.fit(Rn, np.stack([p[:, 0], b, c], 1))
+        b, _, _ = two_link(p[:, 0], p[:, 1], p[:, 2], t, pole, flip)
+    # With both joints free each aims at its own point (exact: no least-squares compromise).
+    Rn = problem.fit(Rn, np.stack([p[:, 0], b, t], 1), subtree=not both)
+    if not history.active.any():  # every start within tolerance already: nothing to do
+        return problem.Rn, history, [problem.Rn] if record else []
+    Rn = np.where(history.active[:, None, None, None], Rn, problem.Rn)
     history.update(problem.error(*problem.forward(Rn))[1])
+    history.stalled = ~history.converged
     return Rn, history, [problem.Rn, Rn] if record else []
+
+
+def _two_link_hinge_hip(problem: Problem, p: Array, t: Array, hip_axis: Array,
+                        knee_axis: Array | None, pole: ArrayLike | None,
+                        flip: bool) -> Array:
+    r"""Two-link with a hinge root (the textbook arm): the hip can only swing the knee on the
+    circle :math:`b(	heta) = a + \exp(	heta[\hat a]_	imes)(b_0 - a)` about its world axis
+    :math:`\hat a`, so the law of cosines becomes one equation in :math:`	heta`. With
+    :math:`v = b(	heta) - a` and :math:`w = t - a`, :math:`\lVert t - b
+Vert = l_2` reads
+    :math:`v\cdot w = (l_1^2 + d^2 - l_2^2)/2`, and
+    :math:`v\cdot w = C + A\cos	heta + B\sin	heta` (:math:`C` the part along the axis), so
+    :math:`	heta = arphi \pm rccosrac{K - C}{\sqrt{A^2 + B^2}}`,
+    :math:`arphi = \mathrm{atan2}(B, A)`. When the knee is a hinge parallel to the hip (a
+    planar arm) the same holds in the plane: the parts along the axis drop out, so a target
+    off the plane gets the pose reaching its projection. Of the two roots (the elbow on
+    either side of the line to the target) the one nearer the pole, else the one bending as
+    the knee bends now (the smaller turn from a straight start); ``flip`` takes the other.
+    Out of reach the cosine is clipped: the arm stretches (or folds) towards the target.
+
+    Returns the edge rotations with the hip turned (and projected into its limits).
+    """
+    a, b0, c0 = p[:, 0], p[:, 1], p[:, 2]
+    ax = matvec(problem.base, hip_axis)
+    v, w, bone2 = b0 - a, t - a, c0 - b0
+    va, wa = dot(v, ax), dot(w, ax)
+    v_perp = v - va[:, None] * ax
+    side = cross(ax, v_perp)
+    K = 0.5 * (dot(v, v) + dot(w, w) - dot(bone2, bone2)) - va * wa
+    if knee_axis is not None and norm(cross(np.asarray(knee_axis), hip_axis)) < 1e-9:
+        h = dot(bone2, ax)  # a planar arm: solve in the plane (the axial parts drop out)
+        K = K - 0.5 * ((va - wa) ** 2 - h * h)
+    A, Bs = dot(v_perp, w), dot(side, w)
+    radius = np.hypot(A, Bs)
+    scale = problem.model.length_scale
+    cos = np.where(radius > 1e-12 * scale * scale, K / np.where(radius > 0, radius, 1.0), 1.0)
+    phi = np.arctan2(Bs, A)
+    half = np.arccos(np.clip(cos, -1.0, 1.0))
+    roots = np.stack([phi - half, phi + half], 1)  # (B, 2)
+    roots = (roots + np.pi) % (2 * np.pi) - np.pi
+    knees = (a[:, None] + np.cos(roots)[..., None] * v_perp[:, None]
+             + np.sin(roots)[..., None] * side[:, None] + va[:, None, None] * ax[:, None])
+    if pole is not None:
+        pole_pt = np.broadcast_to(as_array(pole, "pole", (3,)), a.shape)
+        first = norm(knees[:, 0] - pole_pt) <= norm(knees[:, 1] - pole_pt)
+    else:
+        now = dot(ax, cross(v, c0 - a))  # which way the knee bends now, about the hip axis
+        bend = dot(ax[:, None], cross(knees - a[:, None], w[:, None]))
+        straight = np.abs(now) <= 1e-9 * scale * scale
+        first = np.where(straight, np.abs(roots[:, 0]) <= np.abs(roots[:, 1]),
+                         bend[:, 0] * now >= bend[:, 1] * now)
+    theta = np.where(first != flip, roots[:, 0], roots[:, 1])
+    Rn = problem.Rn.copy()
+    Rn[:, 0] = rotvec_matrix(hip_axis * theta[:, None]) @ Rn[:, 0]
+    return problem.project(Rn)
 
 
 def _two_link_hinge_knee(problem: Problem, M: Array, p: Array, t: Array, knee_axis: Array,
@@ -490,6 +687,8 @@ def _solve_serial(
     R = start
     if limits:
         R = chain.project(R, limits, ops)
+    elif chain.free_balls:  # at or beyond the reach: the stretched pose (see stretch_if_far)
+        R = chain.stretch_if_far(R, base, p0, target, tol, ops)
     if method == "fabrik" and chain.free_balls and not limits:  # positions alone suffice
         R, P, history, frames = solve_fabrik(chain, R, base, p0, target, tol, max_iter, record,
                                              ops)

@@ -76,26 +76,26 @@ def two_link(
     to_t = t - a
     d_raw = norm(to_t)
     lo, hi = np.abs(l1 - l2), l1 + l2
-    reachable = (d_raw <= hi + 1e-12) & (d_raw >= lo - 1e-12)
+    # Lengths below ``eps`` count as zero: relative to the chain, so any size solves alike.
+    eps = TINY * hi
+    reachable = (d_raw <= hi + eps) & (d_raw >= lo - eps)
     d = np.clip(d_raw, lo, hi)
     # Target on the root: no axis to aim along; keep the current one (or any).
     cur = c - a
-    u = np.where((d_raw > TINY)[..., None], to_t, np.where((norm(cur) > TINY)[..., None], cur,
-                                                           b - a))
-    u = np.where((norm(u) > TINY)[..., None], u, [1.0, 0.0, 0.0])
+    u = np.where((d_raw > eps)[..., None], to_t, np.where((norm(cur) > eps)[..., None], cur,
+                                                          b - a))
+    u = np.where((norm(u) > eps)[..., None], u, [1.0, 0.0, 0.0])
     u = u / norm(u)[..., None]
     # Bend direction: the pole with its component along u removed.
     pv = pole_pt - a
     n = pv - dot(pv, u)[..., None] * u
     nn = norm(n)
-    n = np.where((nn > TINY * np.maximum(norm(pv), 1.0))[..., None],
+    n = np.where((nn > TINY * norm(pv))[..., None],
                  n / np.where(nn > 0, nn, 1.0)[..., None], _perpendicular(u))
     if flip:
         n = -n
-    safe_d = np.where(d > TINY, d, 1.0)
-    cos_a = np.where(
-        (d > TINY) & (l1 > TINY), (l1 * l1 + d * d - l2 * l2) / (2 * np.maximum(l1, TINY) * safe_d),
-        1.0)
+    ok = (d > eps) & (l1 > eps)
+    cos_a = np.where(ok, (l1 * l1 + d * d - l2 * l2) / (2 * np.where(ok, l1 * d, 1.0)), 1.0)
     cos_a = np.clip(cos_a, -1.0, 1.0)
     sin_a = np.sqrt(1.0 - cos_a * cos_a)
     new_b = a + l1[..., None] * (cos_a[..., None] * u + sin_a[..., None] * n)
