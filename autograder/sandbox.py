@@ -80,10 +80,6 @@ RUNTIME = (Path(__file__).with_name("child.py"), Path(__file__).with_name("proto
 FATAL = ("timeout", "crash", "garbage")
 INSIDE = "/sandbox"  # where the runtime, the child's files and the working directory appear
 SANDBOX_UID = 65534  # the unprivileged user a root grader runs submissions as ("nobody")
-# RLIMIT_NPROC of the child: threads (bubblewrap refuses new processes; its count is per user
-# namespace) or, run as the sandbox user without namespaces, that user's threads and
-# processes together, so a submission there holds at most TASKS x memory_mb.
-TASKS = {"bubblewrap": 32, "unprivileged": 4}
 
 
 class Isolation(str, enum.Enum):
@@ -120,11 +116,15 @@ class Isolation(str, enum.Enum):
 
 
 LEVELS = tuple(level.value for level in Isolation)
+# RLIMIT_NPROC of the child: threads (bubblewrap refuses new processes; its count is per user
+# namespace) or, run as the sandbox user without namespaces, that user's threads and
+# processes together, so a submission there holds at most TASKS x memory_mb.
+TASKS = {Isolation.BUBBLEWRAP: 32, Isolation.UNPRIVILEGED: 4}
 ISOLATION_NOTES = {
     Isolation.BUBBLEWRAP: "",
-    Isolation.UNPRIVILEGED: "(No Linux namespaces here: the sandbox runs your code as an "
-                            "unprivileged user with time, memory and file limits, and its "
-                            "audit hook keeps other files out of reach.)",
+    Isolation.UNPRIVILEGED: "(No private file system in this run: the sandbox runs your code "
+                            "as an unprivileged user with time, memory and file limits, and "
+                            "its audit hook keeps other files out of reach.)",
     Isolation.PLAIN: "(No Linux namespaces here: the sandbox still limits time, memory, files "
                      "and imports, with its audit hook alone.)",
     Isolation.PORTABLE: "(Weaker isolation on this system: the sandbox's audit hook alone keeps "

@@ -4,7 +4,6 @@ records what it reached; the tests assert it reached nothing."""
 
 from __future__ import annotations
 
-import ctypes
 import errno
 import json
 import os
@@ -17,7 +16,7 @@ import pytest
 from test_autograder_fixtures import REPO
 
 from autograder import seccomp
-from autograder.sandbox import INSIDE, SANDBOX_UID, Limits, Sandbox, isolation
+from autograder.sandbox import INSIDE, SANDBOX_UID, Limits, Sandbox, isolation, remove_tree
 
 BUBBLEWRAP = pytest.mark.skipif(isolation() != "bubblewrap",
                                 reason="no bubblewrap sandbox on this machine")
@@ -103,4 +102,23 @@ def test_the_seccomp_filter_refuses_every_listed_call_and_keeps_threads():
         assert found[name] == errno.EPERM, name
     assert found["clone3"] == errno.ENOSYS
     assert found["socket_unix"] == "allowed" and found["thread"] == "started"
-    assert ctypes  # the test itself may use ctypes; the sandbox never loads it
+
+
+def test_a_deep_tree_with_closed_folders_is_removed(tmp_path):
+    """What a submission may leave in its folder below bubblewrap (whose tmpfs vanishes): 3000
+    levels (paths far past PATH_MAX, beyond any recursion) and a folder closed to everyone."""
+    top = tmp_path / "work"
+    top.mkdir()
+    fd = os.open(top, os.O_RDONLY)
+    for level in range(3000):
+        os.mkdir("d", dir_fd=fd)
+        inner = os.open("d", os.O_RDONLY, dir_fd=fd)
+        if level % 500 == 0:
+            os.close(os.open("f", os.O_WRONLY | os.O_CREAT, dir_fd=inner))
+        os.close(fd)
+        fd = inner
+    os.mkdir("closed", dir_fd=fd)
+    os.chmod("closed", 0, dir_fd=fd)
+    os.close(fd)
+    remove_tree(top)
+    assert not top.exists()

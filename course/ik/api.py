@@ -564,14 +564,13 @@ def _two_link_hinge_hip(problem: Problem, p: Array, t: Array, hip_axis: Array,
                         knee_axis: Array | None, pole: ArrayLike | None,
                         flip: bool) -> Array:
     r"""Two-link with a hinge root (the textbook arm): the hip can only swing the knee on the
-    circle :math:`b(	heta) = a + \exp(	heta[\hat a]_	imes)(b_0 - a)` about its world axis
-    :math:`\hat a`, so the law of cosines becomes one equation in :math:`	heta`. With
-    :math:`v = b(	heta) - a` and :math:`w = t - a`, :math:`\lVert t - b
-Vert = l_2` reads
+    circle :math:`b(\theta) = a + \exp(\theta[\hat a]_\times)(b_0 - a)` about its world axis
+    :math:`\hat a`, so the law of cosines becomes one equation in :math:`\theta`. With
+    :math:`v = b(\theta) - a` and :math:`w = t - a`, :math:`\lVert t - b\rVert = l_2` reads
     :math:`v\cdot w = (l_1^2 + d^2 - l_2^2)/2`, and
-    :math:`v\cdot w = C + A\cos	heta + B\sin	heta` (:math:`C` the part along the axis), so
-    :math:`	heta = arphi \pm rccosrac{K - C}{\sqrt{A^2 + B^2}}`,
-    :math:`arphi = \mathrm{atan2}(B, A)`. When the knee is a hinge parallel to the hip (a
+    :math:`v\cdot w = C + A\cos\theta + B\sin\theta` (:math:`C` the part along the axis), so
+    :math:`\theta = \varphi \pm \arccos\frac{K - C}{\sqrt{A^2 + B^2}}`,
+    :math:`\varphi = \mathrm{atan2}(B, A)`. When the knee is a hinge parallel to the hip (a
     planar arm) the same holds in the plane: the parts along the axis drop out, so a target
     off the plane gets the pose reaching its projection. Of the two roots (the elbow on
     either side of the line to the target) the one nearer the pole, else the one bending as
