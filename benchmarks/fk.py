@@ -32,7 +32,7 @@ import numpy as np
 
 from course.bvh import load_bvh
 from course.fk import forward_kinematics
-from course.rotations.quaternion import _mul, _rotate
+from course.rotations import _kernels
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -91,8 +91,8 @@ def frame_major(parents, offsets, R, root_position):
     Q[:, 0], P[:, 0] = R[:, 0], root_position
     for j in range(1, len(parents)):
         p = parents[j]
-        Q[:, j] = _mul(Q[:, p], R[:, j])
-        P[:, j] = P[:, p] + _rotate(Q[:, p], offsets[j])
+        Q[:, j] = _kernels.quat_mul(Q[:, p], R[:, j])
+        P[:, j] = P[:, p] + _kernels.quat_rotate(Q[:, p], offsets[j])
     return P, Q
 
 

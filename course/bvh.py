@@ -34,9 +34,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from ._typing import Array
 from .motion import (
+    MIN_FRAME_TIME,
     POSITION_CHANNELS,
     ROTATION_CHANNELS,
     Motion,
@@ -46,8 +47,6 @@ from .motion import (
 )
 from .rotations import euler_from_quat, quat_from_euler, quat_identity
 from .skeleton import Ball, Fixed, Hinge, JointType, Skeleton, Universal
-
-Array = NDArray[np.float64]
 
 __all__ = [
     "BVHError",
@@ -63,6 +62,19 @@ __all__ = [
 _CHANNEL_NAMES = {c.upper(): c for c in POSITION_CHANNELS + ROTATION_CHANNELS}
 _FRAMES = re.compile(r"\s*frames\s*:\s*(.*?)\s*$", re.IGNORECASE)
 _FRAME_TIME = re.compile(r"\s*frame\s*time\s*:\s*(.*?)\s*$", re.IGNORECASE)
+# Numbers as the format writes them, in ASCII, plus the inf/nan spellings numpy's reader takes
+# (then refused as not finite). float() alone would also read "1_0" and Arabic-Indic or
+# full-width digits.
+_NUMBER = re.compile(
+    r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:e[+-]?[0-9]+)?|inf(?:inity)?|nan)",
+    re.IGNORECASE | re.ASCII,
+)
+# Whole numbers: ASCII digits, at most 18 of them after leading zeros (more than any file
+# holds, and int() refuses strings past 4300 digits).
+_COUNT = re.compile(r"0*[0-9]{1,18}")
+# Tabs of indentation stop growing at this depth, so a deep chain is saved in linear size
+# (real skeletons are less than 20 deep and are written as they always were).
+_MAX_INDENT = 32
 # Components a rotation channel set cannot express are tolerated up to this (degrees).
 _DROPPED_ANGLE_TOL = 1e-6
 
@@ -166,7 +178,7 @@ def _parse(text: str, source: str, name: str) -> tuple[Motion, list[str]]:
     """The motion, and the quirks worked around (warning messages, left to the caller so that
     the warning points at user code)."""
     quirks: list[str] = []
-    lines = text.splitlines()  # \n, \r\n and \r alike, even mixed; keeps a last unterminated line
+    lines = _lines(text)
     joints, motion_at = _parse_hierarchy(lines, source)
     n_frames, frame_time, data_at = _parse_motion_header(lines, motion_at, source)
     channels = tuple(j.channels for j in joints)
@@ -187,6 +199,35 @@ def _parse(text: str, source: str, name: str) -> tuple[Motion, list[str]]:
         source=source,
     )
     return motion, quirks
+
+
+def _lines(text: str) -> list[str]:
+    r"""The lines of ``text`` without a leading byte order mark, ended by ``\n``, ``\r\n`` or
+    ``\r`` (mixed too) and nothing else: ``str.splitlines`` also breaks at ``\v``, ``\f``,
+    ``\x85``, ``\u2028`` ..., which would shift error line numbers from what an editor shows.
+    A last line without a terminator is kept."""
+    text = text.removeprefix("\ufeff")
+    if "\r" in text:  # checked first: the replacements copy megabytes even when they find none
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    lines = text.split("\n")
+    if lines[-1] == "":  # what follows the last terminator (or the empty text) is no line
+        lines.pop()
+    return lines
+
+
+def _number(token: str) -> float | None:
+    """The value of a number token as BVH writes it (ASCII), or None."""
+    return float(token) if _NUMBER.fullmatch(token) else None
+
+
+def _not_a_number(token: str) -> str:
+    """Why ``token`` is refused, with a hint when Python's float() would have read it."""
+    try:
+        float(token)
+    except ValueError:
+        return f"{token!r} is not a number"
+    return (f"{token!r} is not a number as BVH writes them (ASCII digits 0-9, with an optional "
+            "sign, point and exponent)")
 
 
 _AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
@@ -221,7 +262,8 @@ class _Joint:
     channels: tuple[str, ...] | None = None
 
 
-def _parse_hierarchy(lines: Sequence[str], source: str) -> tuple[list[_Joint], int]:
+# One pass of a line-by-line state machine, each keyword a few lines with its own error.
+def _parse_hierarchy(lines: Sequence[str], source: str) -> tuple[list[_Joint], int]:  # noqa: C901
     """The joints in file order and the index of the ``MOTION`` line."""
 
     def fail(problem: str, at: int) -> BVHError:
@@ -346,12 +388,13 @@ def _open_joint(joints: list[_Joint], stack: list[int], keyword: str, fail, at: 
 def _offset(args: list[str], joint: str, fail, at: int) -> tuple[float, float, float]:
     if len(args) != 3:
         raise fail(f"OFFSET of joint {joint!r} needs 3 numbers, found {len(args)}", at)
-    try:
-        x, y, z = (float(a) for a in args)
-    except ValueError:
+    x, y, z = (_number(a) for a in args)
+    bad = next((a for a, v in zip(args, (x, y, z), strict=True) if v is None), None)
+    if bad is not None:
         raise fail(
-            f"OFFSET of joint {joint!r} is not three numbers: {' '.join(args)!r}", at
-        ) from None
+            f"OFFSET of joint {joint!r} is not three numbers: {' '.join(args)!r} "
+            f"({_not_a_number(bad)})", at
+        )
     if not np.all(np.isfinite([x, y, z])):
         raise fail(f"OFFSET of joint {joint!r} is not finite: {' '.join(args)!r}", at)
     return x, y, z
@@ -360,12 +403,11 @@ def _offset(args: list[str], joint: str, fail, at: int) -> tuple[float, float, f
 def _channels(args: list[str], joint: str, fail, at: int) -> tuple[str, ...]:
     if not args:
         raise fail(f"CHANNELS of joint {joint!r} needs a channel count", at)
-    try:
-        count = int(args[0])
-    except ValueError:
+    if not _COUNT.fullmatch(args[0]):
         raise fail(
-            f"CHANNELS of joint {joint!r}: count {args[0]!r} is not a whole number", at
-        ) from None
+            f"CHANNELS of joint {joint!r}: count {args[0][:40]!r} is not a whole number", at
+        )
+    count = int(args[0])
     names = args[1:]
     if count != len(names):
         raise fail(
@@ -403,12 +445,11 @@ def _parse_motion_header(
     match = _FRAMES.fullmatch(lines[at])
     if match is None:
         raise BVHError(f"expected 'Frames: <count>', found {lines[at].strip()!r}", source, at + 1)
-    try:
-        n_frames = int(match[1])
-    except ValueError:
-        n_frames = -1
-    if n_frames < 0:
-        raise BVHError(f"frame count {match[1]!r} is not a whole number", source, at + 1)
+    if not _COUNT.fullmatch(match[1]):
+        raise BVHError(
+            f"frame count {match[1][:40]!r} is not a whole number below 10**18", source, at + 1
+        )
+    n_frames = int(match[1])
 
     at = next_line(at + 1, "'Frame Time:'")
     match = _FRAME_TIME.fullmatch(lines[at])
@@ -416,13 +457,11 @@ def _parse_motion_header(
         raise BVHError(
             f"expected 'Frame Time: <seconds>', found {lines[at].strip()!r}", source, at + 1
         )
-    try:
-        frame_time = float(match[1])
-    except ValueError:
-        frame_time = float("nan")
-    if not (np.isfinite(frame_time) and frame_time > 0):
+    frame_time = _number(match[1])
+    if frame_time is None or not (np.isfinite(frame_time) and frame_time >= MIN_FRAME_TIME):
         raise BVHError(
-            f"Frame Time {match[1]!r} is not a positive number of seconds", source, at + 1
+            f"Frame Time {match[1]!r} is not a positive number of seconds (finite, at least "
+            f"{MIN_FRAME_TIME:g}, written in ASCII digits)", source, at + 1
         )
     return n_frames, frame_time, at + 1
 
@@ -435,31 +474,40 @@ def _parse_frames(
 
     The fast path hands the frame lines to numpy's C parser in one call; only when that fails
     are the lines split in Python to find the first bad one and report its line number.
+    Frame lines are the non-blank lines, except for a skeleton without channels, whose frames
+    are empty lines. Either way the file must hold every frame it declares, so what is
+    allocated is bounded by the file's length, not by the ``Frames:`` it claims.
     """
     tail = lines[data_at:]
-    numbered = [i for i, line in enumerate(tail) if line and not line.isspace()]
-    if n_channels == 0:  # a static skeleton: frame lines are empty
-        return np.zeros((n_frames, 0))
+    if n_channels:
+        numbered = [i for i, line in enumerate(tail) if line and not line.isspace()]
+    else:
+        numbered = list(range(len(tail)))
     if len(numbered) < n_frames:
         raise BVHError(
             f"fewer frame lines than declared: 'Frames:' says {n_frames}, "
-            f"the file ends after {len(numbered)}",
+            f"the file ends after {len(numbered)}"
+            + ("" if n_channels else " (without channels, each frame is an empty line)"),
             source,
             len(lines),
         )
-    if len(numbered) > n_frames:
+    surplus = sum(1 for i in numbered[n_frames:] if tail[i] and not tail[i].isspace())
+    if surplus:
         quirks.append(
             f"{source}: more frame lines than declared: Frames: says {n_frames}, the file has "
-            f"{len(numbered)}; loading the first {n_frames}"
+            f"{n_frames + surplus}; loading the first {n_frames}"
         )
     rows = [tail[i] for i in numbered[:n_frames]]
     line_numbers = [data_at + 1 + i for i in numbered[:n_frames]]  # 1-based
     if n_frames == 0:
         return np.zeros((0, n_channels))
-    try:
-        values = np.loadtxt(rows, dtype=np.float64, comments=None, ndmin=2)
-    except ValueError:
-        values = None
+    if not n_channels:
+        values = None if any(row and not row.isspace() for row in rows) else np.zeros((n_frames, 0))
+    else:
+        try:
+            values = np.loadtxt(rows, dtype=np.float64, comments=None, ndmin=2)
+        except ValueError:
+            values = None
     if values is None or values.shape != (n_frames, n_channels):
         raise _frame_error(rows, line_numbers, n_channels, source)
     finite = np.isfinite(values)
@@ -484,10 +532,8 @@ def _frame_error(
                 line_numbers[f],
             )
         for token in tokens:
-            try:
-                float(token)
-            except ValueError:
-                return BVHError(f"frame {f}: {token!r} is not a number", source, line_numbers[f])
+            if _number(token) is None:
+                return BVHError(f"frame {f}: {_not_a_number(token)}", source, line_numbers[f])
     return BVHError("the frame lines could not be read as numbers", source, line_numbers[0])
 
 
@@ -500,8 +546,10 @@ def _pose_from_channels(
     # One extra zero column stands in for the axes a joint has no rotation channel for.
     padded = np.concatenate([values, np.zeros((n_frames, 1))], axis=1)
     zero_column = values.shape[1]
-    bones = np.repeat(offsets[None], n_frames, axis=0)  # a position channel replaces its axis
-    animated_bones = False
+    animated_bones = any(c in POSITION_CHANNELS for joint in channels[1:] for c in joint)
+    # A position channel replaces its axis of the OFFSET; per-frame bones of every joint only
+    # when a non-root joint has one, else just the root's row (its position).
+    bones = np.repeat(offsets[None, : n_joints if animated_bones else 1], n_frames, axis=0)
     groups: dict[str, tuple[list[int], list[list[int]]]] = {}  # Euler order -> joints, columns
     column = 0
     for j, joint_channels in enumerate(channels):
@@ -509,7 +557,6 @@ def _pose_from_channels(
         for channel in joint_channels:
             if channel in POSITION_CHANNELS:
                 bones[:, j, "XYZ".index(channel[0])] = values[:, column]
-                animated_bones |= j > 0
             else:
                 rotation_columns.append(column)
             column += 1
@@ -618,7 +665,7 @@ def format_bvh_channels(
         parent = int(skeleton.parents[j])
         while open_blocks and open_blocks[-1] != parent:  # close finished subtrees
             lines.append("\t" * depth[open_blocks.pop()] + "}")
-        depth[j] = depth[parent] + 1 if parent >= 0 else 0
+        depth[j] = min(depth[parent] + 1, _MAX_INDENT) if parent >= 0 else 0
         tab = "\t" * depth[j]
         end_site = is_end_site(skeleton, j) and not channels[j]
         head = "ROOT " if parent < 0 else "End Site" if end_site else "JOINT "

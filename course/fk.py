@@ -31,14 +31,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from functools import lru_cache
+from typing import Generic, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .rotations._checks import as_array, broadcast_leading
-from .rotations.quaternion import _mul
-
-Array = NDArray[np.float64]
+from ._typing import Array
+from ._validate import as_array, broadcast_leading
+from .rotations import _kernels
 
 # How far |q|^2 may be from 1 before a rotation is rejected as not a unit quaternion: loose
 # enough for quaternions stored in float32, tight enough to catch unnormalised input, which
@@ -161,7 +161,10 @@ def _path_steps(parents: NDArray[np.intp], a: int, b: int) -> tuple[Step, ...]:
 
 
 # --------------------------------------------------------------------------- kernel
-def _hamilton_tables() -> tuple[tuple, tuple]:
+_Table = tuple[tuple[tuple[int, int, int], ...], ...]  # per component: (sign, i, k) terms
+
+
+def _hamilton_tables() -> tuple[_Table, ...]:
     # (a b)_c = sum of sign * a_i * b_k; the second table is a b^* (b's vector part negated).
     # Terms are ordered positive first, so each component starts with a plain product.
     terms = (
@@ -181,13 +184,29 @@ _HAMILTON, _HAMILTON_CONJ = _hamilton_tables()
 _CROSS = ((1, 2), (2, 0), (0, 1))  # (a x b)_i = a_j b_k - a_k b_j for (j, k) = _CROSS[i]
 
 
-class _Walk:
+# How a walk holds one quaternion or vector: Python floats (_FloatWalk) or rows (_ArrayWalk).
+V = TypeVar("V")
+
+
+class _Walk(Generic[V]):
     """The walk over the tree; subclasses store ``Q_j``, ``p_j`` and do the arithmetic."""
 
-    Q: Sequence
-    P: Sequence
+    def rotation(self, j: int) -> V:
+        raise NotImplementedError
 
-    def walk(self, parents: NDArray[np.intp], root: int, q0, p0) -> None:
+    def product(self, j: int, src: int, r: V, conjugate: bool) -> None:
+        raise NotImplementedError
+
+    def rotate_add(self, j: int, src: int, x: int, bone: int, sign: int) -> None:
+        raise NotImplementedError
+
+    def set_orientation(self, j: int, q: V) -> None:
+        raise NotImplementedError
+
+    def set_position(self, j: int, p: V) -> None:
+        raise NotImplementedError
+
+    def walk(self, parents: NDArray[np.intp], root: int, q0: V | None, p0: V) -> None:
         """Place joint ``root`` at ``p0`` with orientation ``q0`` (by default the one from
         ordinary FK) and reach every other joint from it; ``q0``, ``p0`` as stored."""
         if q0 is None:
@@ -212,21 +231,23 @@ class _Walk:
                 if positions:
                     self.rotate_add(j, src, src, bone, 1)
 
-    def set_orientation(self, j: int, q) -> None:
-        self.Q[j] = q
 
-    def set_position(self, j: int, p) -> None:
-        self.P[j] = p
-
-
-class _FloatWalk(_Walk):
+class _FloatWalk(_Walk[list[float]]):
     """One frame in Python floats: for a single pose (an IK solver calls this thousands of
     times) plain float arithmetic costs far less than numpy calls on length-1 arrays."""
 
     def __init__(self, R: Array, L: Array):
-        self.R, self.L = R.tolist(), L.tolist()
-        self.Q: list = [None] * len(self.R)
-        self.P: list = [None] * len(self.R)
+        self.R: list[list[float]] = R.tolist()
+        self.L: list[list[float]] = L.tolist()
+        # Empty until the walk fills them, each before it is read.
+        self.Q: list[list[float]] = [[]] * len(self.R)
+        self.P: list[list[float]] = [[]] * len(self.R)
+
+    def set_orientation(self, j: int, q: list[float]) -> None:
+        self.Q[j] = q
+
+    def set_position(self, j: int, p: list[float]) -> None:
+        self.P[j] = p
 
     def rotation(self, j: int) -> list[float]:
         return self.R[j]
@@ -254,7 +275,7 @@ class _FloatWalk(_Walk):
         ]
 
 
-class _ArrayWalk(_Walk):
+class _ArrayWalk(_Walk[Array]):
     """All frames at once on component-major storage ``work (7, J, F)``: ``Q_j`` in
     ``work[0:4, j]`` and ``p_j`` in ``work[4:7, j]``, each component a contiguous row.
 
@@ -294,7 +315,8 @@ class _ArrayWalk(_Walk):
 
     def _bone(self, j: int) -> Array | tuple[float, float, float]:
         if self.l is None:
-            return tuple(float(c) for c in self.L[j])
+            x, y, z = self.L[j]
+            return float(x), float(y), float(z)
         np.copyto(self.l, self.L[:, j].T)
         return self.l
 
@@ -525,4 +547,4 @@ def local_from_global(
         raise ValueError(f"orientations: expected shape (..., {len(par)}, 4), got {got}")
     _check_unit(Q, "orientations", names)
     inv_parent = Q[..., par[1:], :] * np.array([1.0, -1.0, -1.0, -1.0])
-    return np.concatenate([Q[..., :1, :], _mul(inv_parent, Q[..., 1:, :])], axis=-2)
+    return np.concatenate([Q[..., :1, :], _kernels.quat_mul(inv_parent, Q[..., 1:, :])], axis=-2)

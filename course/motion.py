@@ -16,18 +16,27 @@ channels on non-root joints).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import numbers
+import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ._typing import Array
+from ._validate import as_array
 from .skeleton import Skeleton
-
-Array = NDArray[np.float64]
 
 POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
 ROTATION_CHANNELS = ("Xrotation", "Yrotation", "Zrotation")
+
+#: Seconds. The shortest frame time accepted (a million frames per second): anything shorter
+#: is a garbled value, not a recording (5e-324 s would be infinite frames per second).
+MIN_FRAME_TIME = 1e-6
+#: How far the norm of a local rotation may be from 1: float32 data is ~1e-7 off, while a
+#: rotation that was never normalised (or never filled in) is far off.
+UNIT_TOL = 1e-6
 
 
 def rotation_axes(channels: Sequence[str]) -> str:
@@ -85,11 +94,12 @@ class Motion:
     skeleton : Skeleton
         ``J`` joints, parent before child; End Sites are joints named ``"<Parent>_end"``.
     local_rotations : array_like, shape (F, J, 4)
-        :math:`R_i(t)`, unit quaternions (w, x, y, z) relative to the parent joint.
+        :math:`R_i(t)`, unit quaternions (w, x, y, z) relative to the parent joint (norms
+        within :data:`UNIT_TOL` of 1).
     root_positions : array_like, shape (F, 3)
         :math:`p_0(t)`, the root joint's position.
     frame_time : float
-        Seconds between frames (BVH ``Frame Time``).
+        Seconds between frames (BVH ``Frame Time``), at least :data:`MIN_FRAME_TIME`.
     channels : sequence of tuple of str, optional
         Per joint, its BVH channel names in file order. Default: :func:`default_channels`.
     translations : array_like, shape (F, J, 3), optional
@@ -101,6 +111,14 @@ class Motion:
         A short name for display (the file stem when loaded).
     source : str, optional
         Where the motion came from (the file path when loaded).
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, if ``skeleton`` is not a :class:`~course.skeleton.Skeleton`, an
+        array is not real numbers of the right shape (NaN and infinity refused), a rotation
+        is not a unit quaternion (with its frame and joint), or ``frame_time`` is not a
+        number of seconds of at least :data:`MIN_FRAME_TIME`.
     """
 
     skeleton: Skeleton
@@ -113,8 +131,13 @@ class Motion:
     source: str | None = field(default=None)
 
     def __post_init__(self) -> None:
+        if not isinstance(self.skeleton, Skeleton):
+            raise ValueError(
+                f"skeleton: expected a course.skeleton.Skeleton, got {type(self.skeleton).__name__}"
+            )
         n_joints = self.skeleton.n_joints
         self.local_rotations = _float_array(self.local_rotations, "local_rotations", (n_joints, 4))
+        _check_unit(self.local_rotations, self.skeleton.names)
         n_frames = self.local_rotations.shape[0]
         self.root_positions = _float_array(self.root_positions, "root_positions", (3,))
         if self.root_positions.shape[0] != n_frames:
@@ -129,10 +152,7 @@ class Motion:
                     f"translations: has {self.translations.shape[0]} frames, "
                     f"local_rotations has {n_frames}"
                 )
-        frame_time = float(self.frame_time)
-        if not np.isfinite(frame_time) or frame_time <= 0:
-            raise ValueError(f"frame_time: must be a positive number of seconds, got {frame_time}")
-        self.frame_time = frame_time
+        self.frame_time = _seconds(self.frame_time)
         if self.channels is None:
             self.channels = default_channels(self.skeleton)
         self.channels = _checked_channels(self.channels, self.skeleton)
@@ -225,6 +245,14 @@ class Motion:
             names=self.skeleton.names,
         )
 
+    def save(self, path: str | os.PathLike[str], orders: str | Mapping[str, str] | None = None,
+             *, digits: int = 12) -> None:
+        """Write the clip as a BVH file (:func:`course.bvh.save_bvh`, which documents
+        ``orders`` and ``digits``)."""
+        from .bvh import save_bvh  # the BVH layer reads and writes motions
+
+        save_bvh(self, path, orders, digits=digits)
+
     def __repr__(self) -> str:
         label = f"{self.name!r}, " if self.name else ""
         return (
@@ -234,18 +262,48 @@ class Motion:
 
 
 def _float_array(x: ArrayLike, name: str, last: tuple[int, ...]) -> Array:
-    """``x`` as a finite float array of shape (F,) + ``last``."""
-    try:
-        a = np.array(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name}: expected numbers ({exc})") from None
+    """``x`` as a finite float array of shape (F,) + ``last``, a copy the motion owns."""
+    a = as_array(x, name)
     if a.ndim != 1 + len(last) or a.shape[1:] != last:
         want = "(F, " + ", ".join(map(str, last)) + ")"
         raise ValueError(f"{name}: expected shape {want}, got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        frame = int(np.argwhere(~np.isfinite(a))[0][0])
-        raise ValueError(f"{name}: contains NaN or infinity (first in frame {frame})")
-    return a
+    return a.copy() if a is x or a.base is not None else a  # a view of the caller's data
+
+
+def _check_unit(rotations: Array, names: Sequence[str]) -> None:
+    """Refuse local rotations (F, J, 4) that are not unit quaternions, by frame and joint:
+    they would be taken as rotations until saving or FK failed far from the cause."""
+    squared = np.einsum("...i,...i->...", rotations, rotations)  # cheaper than the norms
+    off = (squared < (1.0 - UNIT_TOL) ** 2) | (squared > (1.0 + UNIT_TOL) ** 2)
+    if np.any(off):
+        f, j = (int(i) for i in np.argwhere(off)[0])
+        norm = float(np.linalg.norm(rotations[f, j]))
+        what = (
+            "the zero quaternion, which is no rotation" if norm < 1e-12
+            else f"not a unit quaternion (norm {norm:.9g})"
+        )
+        raise ValueError(
+            f"local_rotations: frame {f}, joint {names[j]!r} is {what}; rotations are unit "
+            "quaternions (normalise with course.rotations.quat_normalize)"
+        )
+
+
+def _seconds(frame_time: object) -> float:
+    """``frame_time`` as a float of seconds, at least :data:`MIN_FRAME_TIME`."""
+    if isinstance(frame_time, np.ndarray) and frame_time.ndim == 0:
+        frame_time = frame_time[()]
+    if not isinstance(frame_time, numbers.Real) or isinstance(frame_time, (bool, np.bool_)):
+        raise ValueError(
+            f"frame_time: expected a number of seconds, got {type(frame_time).__name__} "
+            f"{frame_time!r}"
+        )
+    seconds = float(frame_time)
+    if not (np.isfinite(seconds) and seconds >= MIN_FRAME_TIME):
+        raise ValueError(
+            f"frame_time: must be a positive number of seconds, at least {MIN_FRAME_TIME:g}, "
+            f"got {seconds}"
+        )
+    return seconds
 
 
 def _checked_channels(

@@ -17,9 +17,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import fk
-from .rotations._checks import as_array
-
-Array = NDArray[np.float64]
+from ._typing import Array
+from ._validate import as_array
 
 
 # --------------------------------------------------------------------------- joint types
@@ -30,7 +29,8 @@ def _unit_axis(axis: ArrayLike, name: str) -> tuple[float, float, float]:
     n = float(np.linalg.norm(a))
     if n < 1e-12:
         raise ValueError(f"{name}: has zero length; a joint axis needs a direction")
-    return tuple(float(c) for c in a / n)
+    x, y, z = a / n
+    return float(x), float(y), float(z)
 
 
 @dataclass(frozen=True)
@@ -197,7 +197,8 @@ class Skeleton:
     @property
     def bone_lengths(self) -> Array:
         """``|l_j|`` per joint, shape (J,)."""
-        return np.linalg.norm(self._offsets, axis=-1)
+        lengths: Array = np.linalg.norm(self._offsets, axis=-1)
+        return lengths
 
     def index(self, joint: str | int) -> int:
         """Index of a joint given by name (or an index, checked).

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import re
-import time
 from pathlib import Path
 
 import numpy as np
@@ -176,14 +175,6 @@ def test_fk_matches_independent_scipy_fk(shared_bvh_dir, name):
     positions, orientations = motion.forward_kinematics()
     assert np.allclose(positions[frames], ref_positions, rtol=0, atol=1e-9)
     assert np.allclose(matrix_from_quat(orientations[frames]), ref_matrices, rtol=0, atol=1e-9)
-
-
-def test_load_speed(shared_bvh_dir):
-    for name, budget in [("cmu_12_01_walk.bvh", 0.2), ("01_03.bvh", 1.0)]:
-        load_bvh(shared_bvh_dir / name)  # warm the file cache
-        start = time.perf_counter()
-        load_bvh(shared_bvh_dir / name)
-        assert time.perf_counter() - start < budget, name
 
 
 # -- what real files contain ---------------------------------------------------------------

@@ -12,7 +12,6 @@ import hashlib
 import http.server
 import logging
 import threading
-import time
 from pathlib import Path
 
 import numpy as np
@@ -186,10 +185,8 @@ def test_no_network_and_no_copy(empty_dirs, monkeypatch, pooch_records):
     mirror, cache = empty_dirs
     url = REFUSED + "cmu_12_01_walk.bvh"
     point_url(monkeypatch, WALK, url)
-    start = time.perf_counter()
     with pytest.raises(data.DataUnavailableError) as caught:
         data.load(WALK)
-    assert time.perf_counter() - start < 5
     message = str(caught.value)
     # The file, its pinned URL, where to save it, where we looked and the two variables.
     for part in ("cmu_12_01_walk.bvh", url, str(cache / "cmu_12_01_walk.bvh"), str(mirror),

@@ -20,7 +20,7 @@ from course.ik import (
     transpose_step,
     two_link,
 )
-from course.ik._chains import build_model
+from course.ik._engine.tree import build_model
 from course.rotations import matrix_from_quat, quat_from_rotvec
 
 
@@ -133,9 +133,9 @@ def test_model_jacobian_matches_finite_differences_rerooted(shared_bvh_dir, root
     def effect(delta):
         M2, p2 = model.forward(model.step(Rn, M, base, delta[None]), base, p0)
         rot = M2[0, model.rot_effectors] @ np.swapaxes(M[0, model.rot_effectors], -1, -2)
-        from course.ik._small import rotvec_of
+        from course.ik._engine.small import rotvec_from_matrix
 
-        return np.concatenate([p2[0, model.effectors].ravel(), rotvec_of(rot).ravel()])
+        return np.concatenate([p2[0, model.effectors].ravel(), rotvec_from_matrix(rot).ravel()])
 
     Jfd = finite_difference_jacobian(effect, np.zeros(model.n_cols))
     np.testing.assert_allclose(J[0], Jfd, atol=1e-6 * max(1.0, np.abs(J).max()))
@@ -247,13 +247,33 @@ def test_ccd_positions_reach():
     assert reached >= 18  # CCD can crawl near full extension; see test_ik_solvers for rates
 
 
-def test_arc_turn_matches_arc_matrix_including_opposite_and_zero():
+def test_ccd_and_fabrik_batches_are_their_single_solves():
+    """The lecture loops are batched: each row of a batch (chains of different shapes, a zero
+    bone, a target on the root, out of reach, one already reached) is exactly the single
+    solve of that chain, sweeps/iterations and errors included, and keeps its bones."""
+    rng = np.random.default_rng(8)
+    P = np.cumsum(rng.normal(size=(12, 5, 3)), axis=1)
+    P[3, 2] = P[3, 1]
+    t = rng.normal(size=(12, 3)) * 3
+    t[5], t[6], t[7] = P[5, 0], P[6, -1], P[7, 0] + 50.0
+    for solver in (ccd_positions, fabrik_positions):
+        Pb, its, err = solver(P, t, 1e-6, 40)
+        assert Pb.shape == P.shape and its.shape == err.shape == (12,)
+        np.testing.assert_allclose(_bones(Pb), _bones(P), atol=1e-9)
+        for i in range(12):
+            one = solver(P[i], t[i], 1e-6, 40)
+            np.testing.assert_array_equal(Pb[i], one[0])
+            assert its[i] == one[1] and err[i] == one[2]
+    assert ccd_positions(P[0], t[0])[1].__class__ is int
+
+
+def test_quat_between_matches_matrix_between_including_opposite_and_zero():
     """The serial path's shortest arc (quaternion components, floats and arrays) is the general
-    path's arc_matrix: generic pairs, exactly opposite pairs (a half turn about the same
+    path's matrix_between: generic pairs, exactly opposite pairs (a half turn about the same
     perpendicular axis) and a zero vector (the identity)."""
-    from course.ik._ops import ARRAYS, FLOATS
-    from course.ik._serial import arc_turn
-    from course.ik._small import arc_matrix
+    from course.ik._engine.components import quat_between
+    from course.ik._engine.ops import ARRAYS, FLOATS
+    from course.ik._engine.small import matrix_between
 
     rng = np.random.default_rng(21)
     u = rng.normal(size=(12, 3))
@@ -263,10 +283,10 @@ def test_arc_turn_matches_arc_matrix_including_opposite_and_zero():
     v[4] = -u[4]  # opposite along x
     u[5] = 0.0
     v[6] = 0.0
-    want = arc_matrix(u, v)
-    q = np.stack(arc_turn(tuple(u.T), tuple(v.T), ARRAYS), -1)
+    want = matrix_between(u, v)
+    q = np.stack(quat_between(tuple(u.T), tuple(v.T), ARRAYS), -1)
     np.testing.assert_allclose(np.linalg.norm(q, axis=-1), 1.0, atol=1e-12)
     np.testing.assert_allclose(matrix_from_quat(q), want, atol=1e-9)
     for i in range(len(u)):
-        one = arc_turn(tuple(u[i].tolist()), tuple(v[i].tolist()), FLOATS)
+        one = quat_between(tuple(u[i].tolist()), tuple(v[i].tolist()), FLOATS)
         np.testing.assert_allclose(one, q[i], atol=1e-12)

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from course.ik import Target, solve
-from course.ik._small import rotvec_of
+from course.ik._engine.small import rotvec_from_matrix
 from course.rotations import quat_from_rotvec, quat_mul
 from course.skeleton import chain
 
@@ -37,7 +37,7 @@ axes = st.tuples(*[st.floats(-1, 1)] * 3).map(np.array).filter(lambda v: np.lina
 @PROPERTY
 @given(axes, st.sampled_from([np.pi, np.pi - 1e-12, np.pi - 1e-9, np.pi - 1e-6, np.pi - 1e-3,
                               3.0, 2.0, np.pi / 2, 1.0, 1e-3, 1e-9, 0.0]))
-def test_rotvec_of_matches_scipy_including_half_turns(axis, angle):
+def test_rotvec_from_matrix_matches_scipy_including_half_turns(axis, angle):
     """Against scipy's as_rotvec on every angle in [0, pi], the exact half turn included (up to
     the sign of the axis, the one ambiguity there: +-pi a are the same rotation)."""
     from scipy.spatial.transform import Rotation
@@ -46,7 +46,7 @@ def test_rotvec_of_matches_scipy_including_half_turns(axis, angle):
     R = Rotation.from_rotvec(angle * a).as_matrix()
     if angle == np.pi:  # exactly: R = 2 a a^T - I, whose antisymmetric part is zero
         R = 2 * np.outer(a, a) - np.eye(3)
-    got = rotvec_of(R[None])[0]
+    got = rotvec_from_matrix(R[None])[0]
     ref = Rotation.from_matrix(R).as_rotvec()
     if np.pi - angle < 1e-6:
         err = min(np.abs(got - ref).max(), np.abs(got + ref).max())
@@ -58,12 +58,12 @@ def test_rotvec_of_matches_scipy_including_half_turns(axis, angle):
     np.testing.assert_allclose(Rotation.from_rotvec(got).as_matrix(), R, atol=1e-12)
 
 
-def test_rotvec_of_batched_half_turns_about_random_axes():
+def test_rotvec_from_matrix_batched_half_turns_about_random_axes():
     rng = np.random.default_rng(3)
     a = rng.normal(size=(500, 3))
     a /= np.linalg.norm(a, axis=1, keepdims=True)
     R = 2 * a[:, :, None] * a[:, None, :] - np.eye(3)
-    got = rotvec_of(R)
+    got = rotvec_from_matrix(R)
     np.testing.assert_allclose(np.linalg.norm(got, axis=1), np.pi, atol=1e-12)
     np.testing.assert_allclose(np.abs(np.einsum("bi,bi->b", got / np.pi, a)), 1.0, atol=1e-12)
 
@@ -164,7 +164,7 @@ def test_iteration_cap_reports_max_iterations_not_singular(method):
 def test_best_rotation_rank_one_is_the_shortest_arc():
     """Collinear offsets (and zero-length ones among them) leave a twist free; the fit takes
     the shortest arc, which keeps the previous twist, alone or in a batch."""
-    from course.ik._small import arc_matrix, best_rotation
+    from course.ik._engine.small import best_rotation, matrix_between
 
     rng = np.random.default_rng(5)
     B = 12
@@ -175,7 +175,7 @@ def test_best_rotation_rank_one_is_the_shortest_arc():
     v = scales_u[..., None] * b[:, None] / np.linalg.norm(b, axis=1)[:, None, None] * \
         np.linalg.norm(a, axis=1)[:, None, None]
     R = best_rotation(u, v)
-    np.testing.assert_allclose(R, arc_matrix(a, b), atol=1e-12)
+    np.testing.assert_allclose(R, matrix_between(a, b), atol=1e-12)
     for i in (0, 5):
         np.testing.assert_allclose(best_rotation(u[i:i + 1], v[i:i + 1])[0], R[i], atol=1e-12)
     # A full-rank fit is still Kabsch: it recovers an exact rotation.

@@ -4,6 +4,9 @@ joint angles."""
 
 from __future__ import annotations
 
+import functools
+import re
+
 import numpy as np
 import pytest
 
@@ -185,7 +188,7 @@ def test_bad_input_names_the_argument():
         (dict(root_position=[0, np.nan, 0]), "root_position"),
         (dict(method="newton"), "method"),
         (dict(targets={"nope": t}), "nope"),
-        (dict(targets={"end_effector": (t, [1, 0, 0, 0])}, method="fabrik"), "targets"),
+        (dict(targets={"end_effector": (t, [1, 0, 0, 0])}, method="two_link"), "targets"),
         (dict(weights={"joint1": -1.0}), "weights"),
         (dict(damping=0.1, method="ccd"), "options"),
     ]
@@ -310,23 +313,20 @@ BALL_LIMITS = {f"joint{i}": 0.6 for i in range(7)}
     ("ccd", BALL, BALL_LIMITS, {}),
     ("ccd", BALL, None, {"max_angle": 0.3}),
 ], ids=lambda x: x if isinstance(x, str) else None)
-def test_fast_serial_path_agrees_with_general_model(method, sk, lim, options, monkeypatch):
+def test_fast_serial_path_agrees_with_general_model(method, sk, lim, options):
     """The serial-chain fast path (floats for one problem, component arrays for a batch) and
     the general model reach the same poses: same residuals, limits and bones."""
-    import course.ik.api as api
-
     targets = _reachable_targets(6, seed=16)
     options = dict(options)
     start = IDENT.copy()
     start[:7] = quat_from_axis_angle(AXES, np.full(7, options.pop("start", 0.0)))
     runs = {}
-    _array_engine(monkeypatch)
     for fast in (True, False):
-        monkeypatch.setattr(api, "_FAST_PATH", fast)
-        one = [solve(sk, start, np.zeros(3), {"end_effector": t}, method=method, limits=lim,
-                     max_iter=60, **options) for t in targets]
-        batch = solve(sk, start, np.zeros(3), {"end_effector": targets}, method=method,
-                      limits=lim, max_iter=60, **options)
+        run = _solver("chain" if fast else "tree")
+        one = [run(sk, start, np.zeros(3), {"end_effector": t}, method=method, limits=lim,
+                   max_iter=60, **options) for t in targets]
+        batch = run(sk, start, np.zeros(3), {"end_effector": targets}, method=method,
+                    limits=lim, max_iter=60, **options)
         runs[fast] = one, batch
     (one_f, batch_f), (one_g, _) = runs[True], runs[False]
     for i, (f, g) in enumerate(zip(one_f, one_g, strict=True)):
@@ -342,12 +342,13 @@ def test_fast_serial_path_agrees_with_general_model(method, sk, lim, options, mo
             assert np.all(2 * np.arcsin(np.minimum(half, 1)) <= 0.6 + 1e-9)
 
 
-def _array_engine(monkeypatch) -> None:
-    """Small batches on the fast path solve one problem at a time; these tests compare the
-    array engine (every component an ndarray (B,)) with single solves, so force it."""
-    import course.ik.api as api
+def _solver(engine: str):
+    """``solve`` on one engine: ``"tree"`` (the general model), ``"chain"`` (the serial fast
+    path, a batch of any size on the array engine, every component an ndarray (B,): small
+    batches would otherwise solve one problem at a time) or ``"auto"`` (as ``solve``)."""
+    from course.ik.api import _solve
 
-    monkeypatch.setattr(api, "_BATCH_FROM", dict.fromkeys(api._BATCH_FROM, 0))
+    return functools.partial(_solve, engine=engine)
 
 
 def _hinge_angles(local: np.ndarray) -> np.ndarray:
@@ -396,15 +397,12 @@ def test_fabrik_with_hinges_about_different_axes():
 
 @pytest.mark.parametrize("method", ["pseudo_inverse", "dls", "jacobian_transpose", "ccd", "fabrik"])
 @pytest.mark.parametrize("fast", [True, False])
-def test_straight_chain_target_on_its_line(method, fast, monkeypatch):
+def test_straight_chain_target_on_its_line(method, fast):
     """A straight chain and a reachable target on its line: every Jacobian column is
     perpendicular to the line (no step), FABRIK's points and CCD's turns stay on it. The
     solvers first bend the chain by a small deterministic turn and then reach, on ball and
     hinge chains, single and batched, fast path and general model alike."""
-    import course.ik.api as api
-
-    monkeypatch.setattr(api, "_FAST_PATH", fast)
-    _array_engine(monkeypatch)
+    solve = _solver("chain" if fast else "tree")
     sk = chain([1.0, 0.5, 2.0, 0.7])
     ident = np.tile(IDENT[0], (5, 1))
     targets = np.array([[2.5, 0, 0], [1.5, 0, 0], [-2.0, 0, 0], [0.8, 0, 0]])
@@ -428,13 +426,11 @@ def test_straight_chain_target_on_its_line(method, fast, monkeypatch):
 
 @pytest.mark.parametrize("method", ["pseudo_inverse", "dls"])
 @pytest.mark.parametrize("fast", [True, False])
-def test_singular_pose_reported(method, fast, monkeypatch):
+def test_singular_pose_reported(method, fast):
     """A planar arm (every hinge about z) and a target out of its plane at a reachable
     distance: the Jacobian has rank 2 everywhere, no step leaves the plane, so the solve
     stalls and says "singular"."""
-    import course.ik.api as api
-
-    monkeypatch.setattr(api, "_FAST_PATH", fast)
+    solve = _solver("auto" if fast else "tree")
     arm = chain([1.0] * 7, axes=[0, 0, 1])
     r = solve(arm, IDENT, np.zeros(3), {"end_effector": [3.0, 2.0, 2.0]}, method=method)
     assert not r.converged and r.reason == "singular"
@@ -443,15 +439,12 @@ def test_singular_pose_reported(method, fast, monkeypatch):
 
 @pytest.mark.parametrize("method", [m for m in METHODS if m != "two_link"])
 @pytest.mark.parametrize("fast", [True, False])
-def test_result_of_one_problem_and_of_a_batch(method, fast, monkeypatch):
+def test_result_of_one_problem_and_of_a_batch(method, fast):
     """One problem's result holds plain values (bool, int, str, residuals (T,), arrays without a
     batch axis) whether the fast path solved it in floats or the general model as a batch of
     one; a batch's holds arrays (B,) and residuals (T, B); and each single solve is its row of
     the batch. Targets: reachable, beyond reach (stretched, one pass) and a capped solve."""
-    import course.ik.api as api
-
-    monkeypatch.setattr(api, "_FAST_PATH", fast)
-    _array_engine(monkeypatch)
+    solve = _solver("chain" if fast else "tree")
     sk = BALL if method == "fabrik" else HINGE
     targets = np.vstack([_reachable_targets(3, seed=19), [[9.0, 1.0, 0.0]]])
     kw = dict(method=method, max_iter=25)
@@ -480,8 +473,8 @@ def test_history_of_one_problem_in_floats_keeps_a_batchs_books():
     """The bookkeeping of one problem in floats (the fast path) is that of its column in a
     batch: iterations, residuals, the stall test, the iteration cap, and the reasons in their
     order of precedence (converged, unreachable, singular, stalled, max_iterations)."""
-    from course.ik._ops import ARRAYS, FLOATS
-    from course.ik.result import History
+    from course.ik._engine.history import History
+    from course.ik._engine.ops import ARRAYS, FLOATS
 
     tol, max_iter, T = 1e-3, 12, 16
     k = np.arange(T + 1)[:, None]
@@ -516,3 +509,54 @@ def test_history_of_one_problem_in_floats_keeps_a_batchs_books():
         assert one.residuals == column[:one.iterations + 1].tolist()
         assert np.all(column[one.iterations:] == one.error)  # held once stopped
     assert batch.iterations.tolist() == [10, 8, 12, 8, 8, 0]
+
+
+def test_the_method_registry_is_what_solve_takes_and_documents():
+    """One record per method: ``METHODS``, the default budgets, the options ``solve`` accepts
+    (an unknown one is refused naming the ones it takes, a bad value naming what it must be)
+    and ``solve``'s docstring all come from ``course.ik.methods.REGISTRY``."""
+    from course.ik import DEFAULT_MAX_ITER
+    from course.ik.methods import REGISTRY
+
+    assert METHODS == tuple(REGISTRY) == ("two_link", "ccd", "fabrik", "jacobian_transpose",
+                                          "pseudo_inverse", "dls")
+    assert DEFAULT_MAX_ITER == {name: m.max_iter for name, m in REGISTRY.items()}
+    doc = solve.__doc__
+    arm = chain([1.0, 1.0])
+    start = np.tile(IDENT[0], (3, 1))
+    for name, m in REGISTRY.items():
+        assert f'"{name}"' in doc
+        with pytest.raises(ValueError, match=r"options: \['bogus'\] do not apply to method"):
+            solve(arm, start, np.zeros(3), {"end_effector": [1.0, 1.0, 0]}, method=name, bogus=1)
+        for option, spec in m.options.items():
+            assert f"``{option}``" in doc
+            if spec.test is not None:
+                with pytest.raises(ValueError, match=f"^{option}: expected {re.escape(spec.what)}"):
+                    solve(arm, start, np.zeros(3), {"end_effector": [1.0, 1.0, 0]}, method=name,
+                          **{option: -1.0})
+        # Orientation targets only where the record says so.
+        target = {"end_effector": Target([1.0, 1.0, 0.0], [1.0, 0, 0, 0])}
+        if m.orientations:
+            solve(arm, start, np.zeros(3), target, method=name)
+        else:
+            with pytest.raises(ValueError, match=f"method '{name}' takes no orientation "
+                                                 f"targets \\({re.escape(m.targets)}\\)"):
+                solve(arm, start, np.zeros(3), target, method=name)
+
+
+@pytest.mark.parametrize("engine", ["auto", "chain", "tree"])
+def test_recorded_fabrik_at_exactly_full_reach(engine):
+    """A free ball chain, straight, and a target exactly at its tip's full reach along its
+    line: the stretched start is the answer, so nothing is iterated; recording it gave an
+    IndexError on the fast path (no iteration to fit). One frame, 0 iterations, converged,
+    single and batched alike."""
+    run = _solver(engine)
+    ident = np.tile(IDENT[0], (8, 1))
+    one = run(BALL, ident, np.zeros(3), {"end_effector": [7.0, 0, 0]}, method="fabrik",
+              record=True)
+    assert one.converged and one.iterations == 0 and len(one.frames) == 1
+    np.testing.assert_allclose(one.positions[-1], [7.0, 0, 0], atol=1e-12)
+    batch = run(BALL, ident, np.zeros(3), {"end_effector": [[7.0, 0, 0], [0, 7.0, 0]]},
+                method="fabrik", record=True)
+    assert batch.converged.all() and batch.iterations[0] == 0
+    np.testing.assert_allclose(batch.positions[:, -1], [[7.0, 0, 0], [0, 7.0, 0]], atol=1e-9)

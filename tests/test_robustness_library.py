@@ -4,6 +4,8 @@ constraints (bone lengths, hinge axes, limits), never by joint angles."""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -121,25 +123,26 @@ def test_no_free_joint_on_the_path_is_a_clear_error(method):
 
 
 # --------------------------------------------------------------------------- 3. small batches
-SERIAL_SOLVERS = ("solve_ccd", "solve_fabrik", "solve_fabrik_joints", "solve_jacobian")
-
-
 def _engines(monkeypatch):
     """Record the engine (``ops``: floats for one problem, arrays for a batch) of every serial
-    solve ``solve`` runs."""
-    import course.ik.api as api
-    from course.ik._ops import FLOATS
+    solve ``solve`` runs (each method's chain solver in the registry, spied on)."""
+    import dataclasses
+
+    from course.ik._engine.ops import FLOATS
+    from course.ik.methods import REGISTRY
 
     used = []
 
     def spy(solver):
         def run(*args, **kw):
-            used.append("floats" if kw.get("ops", args[-1]) is FLOATS else "arrays")
+            used.append("floats" if kw["ops"] is FLOATS else "arrays")
             return solver(*args, **kw)
         return run
 
-    for name in SERIAL_SOLVERS:
-        monkeypatch.setattr(api, name, spy(getattr(api, name)))
+    for name, method in REGISTRY.items():
+        if method.chain is not None:
+            monkeypatch.setitem(REGISTRY, name, dataclasses.replace(method,
+                                                                    chain=spy(method.chain)))
     return used
 
 
@@ -180,7 +183,7 @@ def test_small_batch_is_the_single_solves(method, monkeypatch):
             assert np.all(batch.residuals[r.iterations:, i] == r.error)
             np.testing.assert_array_equal(batch.frames[-1]["positions"][i], r.positions)
     assert batch.reason[5] == "unreachable"
-    if method != "jacobian_transpose":  # its batches never win (see api._BATCH_FROM)
+    if method != "jacobian_transpose":  # its batches never win (see Method.batch_from)
         solve(sk, start, np.zeros(3), {"end_effector": targets}, method=method, max_iter=3)
         assert used == ["arrays"]
 
@@ -200,13 +203,13 @@ def _random_ball_chains(n: int, seed: int):
 
 @pytest.mark.parametrize("method", ITERATIVE)
 @pytest.mark.parametrize("fast", [True, False])
-def test_targets_at_full_reach_converge(method, fast, monkeypatch):
+def test_targets_at_full_reach_converge(method, fast):
     """Item 4: a target at exactly full reach (or within tol of it) is reached by every
     method, on the fast path and the general model, single and batched (before: CCD, JT and
     DLS 0/40, FABRIK 7/40; the issue's chain [1, .7, 1.3] at 3.0 stopped 4e-4 to 2e-2 away)."""
-    import course.ik.api as api
+    from course.ik.api import _solve
 
-    monkeypatch.setattr(api, "_FAST_PATH", fast)
+    solve = functools.partial(_solve, engine="auto" if fast else "tree")
     cases = [(chain([1.0, 0.7, 1.3]), np.array([1.0, 2.0, 3.0]) / np.sqrt(14))]
     cases += list(_random_ball_chains(40, seed=4))
     for i, (sk, u) in enumerate(cases):
@@ -391,7 +394,8 @@ def test_property_every_input_gets_an_honest_answer(problem):
     err = _fk_error(sk, r, sk.names[-1], targets)
     np.testing.assert_allclose(err, r.error, atol=1e-9)
     np.testing.assert_array_equal(r.converged, r.error < tol)
-    assert set(r.reason) <= {"", "unreachable", "singular", "stalled", "max_iterations"}
+    assert set(r.reason) <= {"", "unreachable", "singular", "stalled", "max_iterations",
+                             "limits"}
     assert not np.any((r.reason == "max_iterations") & (r.iterations == 0))
     bones = np.linalg.norm(np.diff(r.positions, axis=1), axis=-1)
     np.testing.assert_allclose(bones, sk.bone_lengths[1:] + 0 * bones, atol=1e-9)

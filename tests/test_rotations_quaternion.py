@@ -24,7 +24,8 @@ from course.rotations import (
     quat_normalize,
     quat_rotate,
 )
-from course.rotations.quaternion import _mul, _rotate
+from course.rotations._kernels import quat_mul as _mul
+from course.rotations._kernels import quat_rotate as _rotate
 
 RNG_SEED = 20240105
 

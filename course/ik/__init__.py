@@ -1,12 +1,15 @@
 """Inverse kinematics: the lecture's solvers, one module per method, one entry point.
 
-:func:`solve` runs any method on any skeleton (any fixed joint, any effectors, batched);
+:func:`solve` runs any method on any skeleton (any fixed joint, any effectors, batched),
+:func:`solve_motion` a target per frame over a clip (a new :class:`~course.motion.Motion`);
 the modules also expose each method as a plain function the notebooks can show:
 :func:`two_link`, :func:`ccd_positions`, :func:`fabrik_positions` / :func:`fabrik_batch`,
 :func:`chain_jacobian`, :func:`finite_difference_jacobian` and the Jacobian steps.
+:mod:`course.ik.methods` lists the methods (:data:`METHODS`), and ``course.ik._engine`` holds
+the engines ``solve`` runs them on (see ``docs/architecture.md``).
 """
 
-from .api import DEFAULT_MAX_ITER, METHODS, solve
+from .api import solve
 from .ccd import ccd_positions
 from .fabrik import fabrik_batch, fabrik_positions
 from .jacobian import (
@@ -19,13 +22,17 @@ from .jacobian import (
     pinv_wide,
     transpose_step,
 )
-from .result import IKResult, Target
+from .methods import DEFAULT_MAX_ITER, METHODS
+from .motion import MotionIK, solve_motion
+from .result import IKResult, SwingTwist, Target
 from .two_link import two_link
 
 __all__ = [
     "DEFAULT_MAX_ITER",
     "METHODS",
+    "MotionIK",
     "IKResult",
+    "SwingTwist",
     "Target",
     "ccd_positions",
     "chain_jacobian",
@@ -38,6 +45,7 @@ __all__ = [
     "pinv_tall",
     "pinv_wide",
     "solve",
+    "solve_motion",
     "transpose_step",
     "two_link",
 ]

@@ -1,54 +1,39 @@
-"""``solve``: one entry point for every IK method, on any skeleton, rooted at any joint."""
+"""``solve``: one entry point for every IK method, on any skeleton, rooted at any joint.
+
+A solve is three steps: :func:`_validate` checks every argument against the method's record
+(:mod:`course.ik.methods`) and builds a :class:`~course.ik._engine.request.Request`,
+:func:`_run` hands it to an engine (the serial-chain fast path where the paths are one chain,
+else the general tree engine), and :func:`_result` builds the :class:`IKResult`.
+"""
 
 from __future__ import annotations
 
+import copy
 import math
 import weakref
 from collections.abc import Mapping
 from functools import lru_cache
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from course import fk
-from course.rotations import matrix_from_quat, quat_from_matrix
-from course.rotations._checks import as_array, broadcast_leading
+from course._typing import Array
+from course._validate import as_array, broadcast_leading
 
-from . import ccd, fabrik, jacobian
-from ._chains import ChainModel, Problem, build_model
-from ._ops import ARRAYS, FLOATS
-from ._serial import (
-    SerialChain,
-    serial_chain,
-    solve_ccd,
-    solve_fabrik,
-    solve_fabrik_joints,
-    solve_jacobian,
-    units_like,
-)
-from ._small import (
-    TINY,
-    best_rotation,
-    cross,
-    dot,
-    matvec,
-    norm,
-    orthonormalize,
-    rotvec_matrix,
-)
-from .result import History, IKResult, Target
-from .two_link import two_link
+from ._engine.chain import SerialChain, serial_chain
+from ._engine.chain_solvers import solve_on_chain
+from ._engine.components import Limit
+from ._engine.request import Request, Solved
+from ._engine.tree import TreeModel, build_model
+from ._engine.tree_solvers import DEFAULT_DAMPING, solve_on_tree
+from .methods import REGISTRY, Method
+from .result import IKResult, SwingTwist, Target
 
-Array = NDArray[np.float64]
-
-# Serial chains take the lean path of course.ik._serial (tests switch it off to compare).
-_FAST_PATH = True
-
-METHODS = ("two_link", "ccd", "fabrik", "jacobian_transpose", "pseudo_inverse", "dls")
-# Iteration budgets: Jacobian transpose converges linearly and slowly near the target.
-DEFAULT_MAX_ITER = {"two_link": 1, "ccd": 200, "fabrik": 200, "jacobian_transpose": 2000,
-                    "pseudo_inverse": 100, "dls": 100}
+# Which engine runs a solve: "auto" (the serial-chain fast path for a chain, small batches one
+# problem at a time), "chain" (the fast path for any batch, in arrays) or "tree" (always the
+# general engine). Only tests and benchmarks ask for anything but "auto".
+Engine = Literal["auto", "chain", "tree"]
 
 
 def solve(
@@ -78,7 +63,7 @@ def solve(
     A straight path whose target lies on its own line is a singular pose for every iterative
     method (no Jacobian column points along the line; FABRIK and CCD stay on it): the
     iterative methods first bend it by a small deterministic turn of each joint
-    (:func:`course.ik._chains.bend_increment`, 0.05 rad), so ``frames[0]`` and
+    (:func:`course.ik._engine.tree.bend_increment`, 0.05 rad), so ``frames[0]`` and
     ``residuals[0]`` are those of the bent start.
 
     Parameters
@@ -92,9 +77,12 @@ def solve(
         Position of joint 0.
     targets : mapping joint (name or index) -> target
         A world position ``(3,)`` or ``(B, 3)``; a pair ``(position, quaternion)``; or a
-        :class:`Target` (``Target(None, q)``: an orientation alone). Orientation targets need
-        a Jacobian method.
+        :class:`Target` (``Target(None, q)``: an orientation alone; ``weight_position`` and
+        ``weight_orientation`` weigh competing targets). Every iterative method takes
+        orientation targets (CCD and FABRIK by an end-orientation step), ``two_link`` none;
+        each record's ``targets`` says how it meets and weighs them.
     method : {"two_link", "ccd", "fabrik", "jacobian_transpose", "pseudo_inverse", "dls"}
+        The records of :data:`course.ik.methods.REGISTRY` (what each takes and runs on).
     root : joint name or index, optional
         The joint that stays fixed; default joint 0.
     tol : float
@@ -103,12 +91,15 @@ def solve(
         Default per method (:data:`DEFAULT_MAX_ITER`).
     weights : mapping joint -> float, optional
         Jacobian methods: the regulariser :math:`W` (larger: the joint moves less).
-    limits : mapping joint -> (lo, hi) or float, optional
-        Hinge angle range in radians (one angle ``a``: the range ``(-a, a)``), or the
-        largest rotation angle of a ball joint's local
-        rotation (swing and twist together: the bone stays in a cone of that half-angle about
-        its rest direction, and its twist is capped as well). Enforced by projection after
-        each step (CCD, Jacobian) or joint placement (FABRIK, two-link).
+    limits : mapping joint -> (lo, hi), float or SwingTwist, optional
+        Hinge angle range in radians (one angle ``a``: the range ``(-a, a)``); for a ball
+        joint a :class:`SwingTwist` (a cone on the swing of its bone and a twist range,
+        projected by :func:`course.rotations.clamp_swing_twist`) or one largest rotation
+        angle of its local rotation (swing and twist together). Enforced by projection after
+        each step (CCD, Jacobian) or joint placement (FABRIK, two-link), so every iteration's
+        pose is within them. Joint 0 takes none when ``root`` is a joint whose paths go up
+        through it (its rotation is then the body's world orientation). A target the limits
+        keep the solve from is reported ``reason="limits"`` (see :class:`IKResult`).
     record : bool
         Keep every iteration's pose in ``result.frames``.
     **options
@@ -130,22 +121,142 @@ def solve(
         an effector no joint on its path can move; a two-link solve whose path is not two
         bones.
     """
-    if method not in METHODS:
-        raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
-    _check_options(method, options)
-    if options.get("max_angle") == math.inf:  # no cap
-        options["max_angle"] = None
+    return _solve(skeleton, local_rotations, root_position, targets, method, root, tol,
+                  max_iter, weights, limits, record, engine="auto", **options)
+
+
+def _solve(skeleton: Any, local_rotations: ArrayLike, root_position: ArrayLike,
+           targets: Mapping[str | int, Any], method: str = "dls", root: str | int | None = None,
+           tol: float = 1e-4, max_iter: int | None = None,
+           weights: Mapping[str | int, float] | None = None,
+           limits: Mapping[str | int, Any] | None = None, record: bool = False, *,
+           engine: Engine = "auto", **options: Any) -> IKResult:
+    """:func:`solve` on the chosen ``engine`` (see :data:`Engine`)."""
+    if engine not in ("auto", "chain", "tree"):
+        raise ValueError(f"engine: expected 'auto', 'chain' or 'tree', got {engine!r}")
+    req = _validate(skeleton, local_rotations, root_position, targets, method, root, tol,
+                    max_iter, weights, limits, record, options)
+    return _run(req, engine)
+
+
+def _validate(skeleton: Any, local_rotations: ArrayLike, root_position: ArrayLike,
+              targets: Any, method: str, root: str | int | None, tol: float,
+              max_iter: int | None, weights: Mapping | None, limits: Mapping | None,
+              record: bool, options: dict[str, Any]) -> Request:
+    """Every argument of :func:`solve` checked (``ValueError`` naming the first bad one), as
+    the :class:`Request` the engines run."""
+    spec = _method(method)
+    options = _options(spec, options)
+    max_iter = _tol_and_max_iter(spec, tol, max_iter)
+    _check_skeleton(skeleton)
+    local = _start_pose(skeleton, local_rotations)
+    root_pos = _position(root_position, "root_position")
+    if root_pos.ndim > 2:
+        raise ValueError(f"root_position: expected shape ([B,] 3), got {root_pos.shape}")
+    k = 0 if root is None else skeleton.index(root)
+    pos_t, rot_t, pos_w, rot_w = _targets(skeleton, targets, spec, k)
+    B, batched = _batch(skeleton, local, root_pos, pos_t, rot_t)
+    model, serial = _model(skeleton, k, tuple(pos_t), tuple(rot_t))
+    _check_movable(skeleton, model, k)
+    _check_hinges(skeleton, model, local)
+    col_weight = _weights(skeleton, model, weights)
+    joint_limits = _limits(skeleton, model, limits)
+    if spec.weights and options["damping"] is None:
+        options["damping"] = DEFAULT_DAMPING * model.length_scale
+    return Request(skeleton=skeleton, method=method, local=local, root_pos=root_pos, root=k,
+                   pos_t=pos_t, rot_t=rot_t, batched=batched, B=B, model=model, serial=serial,
+                   col_weight=col_weight, pos_weight=pos_w, rot_weight=rot_w,
+                   limits=joint_limits,
+                   limited=bool(limits), tol=tol, max_iter=max_iter, record=record,
+                   options=options)
+
+
+def _run(req: Request, engine: Engine) -> IKResult:
+    """Solve a request (:func:`_run_engine`); a limited solve that missed its target is then
+    told apart from one the limits made unreachable (:func:`_blame_limits`)."""
+    result = _run_engine(req, engine)
+    if any(req.limits) and not np.all(result.converged):
+        _blame_limits(req, result, engine)
+    return result
+
+
+def _blame_limits(req: Request, result: IKResult, engine: Engine) -> None:
+    """``reason="limits"`` for every problem that missed its target with the limits and
+    reaches it without them: the same method from the same start, with the same tolerance and
+    budget (so the limits are what made the difference; never a silent
+    ``"max_iterations"`` or ``"stalled"``)."""
+    free = copy.copy(req)
+    free.limits, free.limited, free.record = req.model.no_limits, False, False
+    unlimited = _run_engine(free, engine)
+    blame = np.logical_and(np.logical_not(result.converged), unlimited.converged)
+    if np.ndim(blame):
+        result.reason = np.where(blame, "limits", result.reason)
+    elif blame:
+        result.reason = "limits"
+
+
+def _run_engine(req: Request, engine: Engine) -> IKResult:
+    """Solve a request: on the serial-chain fast path where its paths are one chain and the
+    method has a chain solver (a small batch one problem at a time in floats, which is
+    faster: see :attr:`Method.batch_from`), else on the general tree engine."""
+    spec = REGISTRY[req.method]
+    if engine == "tree" or req.serial is None or spec.chain is None:
+        return _result(solve_on_tree(req, spec.tree, spec.iterative), req.method)
+    limits = req.serial.limits(req.limits) if req.limited else []
+    singles_below = spec.singles_below(req.serial.free_balls, bool(limits))
+    if engine == "chain" or not req.batched or req.B >= singles_below:
+        return _result(solve_on_chain(req, spec.chain, limits, spec.weights), req.method)
+    return _stack([_result(solve_on_chain(row, spec.chain, limits, spec.weights), req.method)
+                   for row in req.rows()])
+
+
+def _method(method: Any) -> Method:
+    if not isinstance(method, str) or method not in REGISTRY:
+        raise ValueError(f"method: expected one of {tuple(REGISTRY)}, got {method!r}")
+    return REGISTRY[method]
+
+
+def _options(spec: Method, options: Mapping[str, Any]) -> dict[str, Any]:
+    """The method's options, checked (``ValueError`` naming an option the method does not take
+    or a value it cannot use; NaN fails every test), with defaults for those not given or
+    None; ``max_angle=inf`` is no cap."""
+    unknown = set(options) - set(spec.options)
+    if unknown:
+        raise ValueError(f"options: {sorted(unknown)} do not apply to method {spec.name!r} "
+                         f"(it takes {sorted(spec.options) or 'none'})")
+    out = {}
+    for name, opt in spec.options.items():
+        value = options.get(name)
+        if value is None:
+            value = opt.default
+        elif opt.test is not None and not (_is_number(value) and opt.test(value)):
+            raise ValueError(f"{name}: expected {opt.what}, got {value!r}")
+        out[name] = value
+    if out.get("max_angle") == math.inf:  # no cap
+        out["max_angle"] = None
+    return out
+
+
+def _tol_and_max_iter(spec: Method, tol: Any, max_iter: Any) -> int:
+    """``max_iter`` (the method's default for None), after checking it and ``tol``."""
     if not (_is_number(tol) and math.isfinite(tol) and tol > 0):
         raise ValueError(f"tol: expected a positive number, got {tol!r}")
     if max_iter is None:
-        max_iter = DEFAULT_MAX_ITER[method]
-    elif (isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer)
-          or max_iter < 0):
+        return spec.max_iter
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer) or max_iter < 0:
         raise ValueError(f"max_iter: expected a whole number >= 0, got {max_iter!r}")
+    return int(max_iter)
+
+
+def _check_skeleton(skeleton: Any) -> None:
     if not all(hasattr(skeleton, a) for a in ("n_joints", "parents", "offsets", "joint_types",
                                                 "index")):
         raise ValueError(f"skeleton: expected a course.skeleton.Skeleton, got "
                          f"{type(skeleton).__name__}")
+
+
+def _start_pose(skeleton: Any, local_rotations: ArrayLike) -> Array:
+    """The starting local rotations ``([B,] J, 4)``, normalised (a zero quaternion refused)."""
     J = skeleton.n_joints
     local = as_array(local_rotations, "local_rotations", (4,))
     if local.ndim not in (2, 3) or local.shape[-2] != J:
@@ -154,139 +265,103 @@ def solve(
     qn = big * np.linalg.norm(local / np.where(big > 0, big, 1.0), axis=-1, keepdims=True)
     if qn.min() < 1e-12:
         raise ValueError("local_rotations: contains a zero quaternion, which is no rotation")
-    local = local / qn
-    root_pos = _position(root_position, "root_position")
-    if root_pos.ndim > 2:
-        raise ValueError(f"root_position: expected shape ([B,] 3), got {root_pos.shape}")
-    k = 0 if root is None else skeleton.index(root)
+    return local / qn
 
+
+def _targets(skeleton: Any, targets: Any, spec: Method,
+             k: int) -> tuple[dict[int, Array], dict[int, Array], Array, Array]:
+    """Position and orientation targets by joint index, checked, and their relative weights
+    (E,) and (E_r,), the largest 1."""
     if not isinstance(targets, Mapping) or not targets:
         raise ValueError("targets: expected a non-empty mapping joint -> target")
-    pos_t, rot_t = {}, {}
+    pos_t, rot_t, pos_w, rot_w = {}, {}, [], []
     for key, value in targets.items():
         j = skeleton.index(key)
         name = f"targets[{key!r}]"
         position, orientation = _split_target(value)
+        weights = _target_weights(value, name)
         if position is None and orientation is None:
             raise ValueError(f"{name}: expected a position (3,) or ([B,] 3), a pair (position, "
                              f"quaternion) or a Target, got {value!r}")
         if position is not None:
             pos_t[j] = _position(position, f"{name} position")
+            pos_w.append(weights[0])
         if orientation is not None:
             q = as_array(orientation, f"{name} orientation", (4,))
             if np.min(np.einsum("...i,...i->...", q, q)) < 1e-24:
                 raise ValueError(f"{name} orientation: the zero quaternion is no rotation")
             rot_t[j] = q
-    if rot_t and method not in jacobian.METHODS:
-        raise ValueError(f"targets: orientation targets need a Jacobian method, not {method!r}")
+            rot_w.append(weights[1])
+    if rot_t and not spec.orientations:
+        raise ValueError(f"targets: method {spec.name!r} takes no orientation targets "
+                         f"({spec.targets}); methods that do: "
+                         f"{[m.name for m in REGISTRY.values() if m.orientations]}")
     if k in pos_t or k in rot_t:
         raise ValueError(f"root: joint {skeleton.names[k]!r} is fixed, it cannot also be a target")
+    top = max(pos_w + rot_w)
+    return pos_t, rot_t, np.array(pos_w) / top, np.array(rot_w) / top
 
+
+def _target_weights(value: Any, name: str) -> tuple[float, float]:
+    """A :class:`Target`'s position and orientation weights, checked (1 for other forms)."""
+    if not isinstance(value, Target):
+        return 1.0, 1.0
+    for what in ("weight_position", "weight_orientation"):
+        w = getattr(value, what)
+        if not (_is_number(w) and math.isfinite(w) and w > 0):
+            raise ValueError(f"{name} {what}: expected a positive number, got {w!r}")
+    return float(value.weight_position), float(value.weight_orientation)
+
+
+def _batch(skeleton: Any, local: Array, root_pos: Array, pos_t: dict[int, Array],
+           rot_t: dict[int, Array]) -> tuple[int, bool]:
+    """The batch size and whether there is a batch axis at all."""
     shape = broadcast_leading(
         "targets", ("local_rotations", local, 2), ("root_position", root_pos, 1),
         *((f"targets[{skeleton.names[j]!r}] position", a, 1) for j, a in pos_t.items()),
         *((f"targets[{skeleton.names[j]!r}] orientation", a, 1) for j, a in rot_t.items()))
     if len(shape) > 1:
         raise ValueError(f"targets: leading shapes {shape} do not broadcast to one batch axis")
-    batched = len(shape) == 1
-    B = shape[0] if batched else 1
+    return (shape[0], True) if len(shape) == 1 else (1, False)
 
-    model, serial = _model(skeleton, k, tuple(pos_t), tuple(rot_t))
-    _check_movable(skeleton, model, k)
-    _check_hinges(skeleton, model, local)
-    col_weight = _weights(skeleton, model, weights)
-    max_iter = int(max_iter)
-    if _FAST_PATH and serial is not None and method != "two_link":
-        (target,) = pos_t.values()
-        lims = serial.limits(*_limits(skeleton, model, limits)) if limits else []
-        if not batched or B >= _batch_from(method, serial, lims):
-            return _result(*_solve_serial(
-                skeleton, serial, model, local, root_pos, k, target, B, batched, method, tol,
-                max_iter, col_weight, lims, record, **options), method)
-        # A small batch: one problem at a time in floats is faster (see _BATCH_FROM).
-        rows = zip(np.broadcast_to(local, (B, J, 4)), np.broadcast_to(root_pos, (B, 3)),
-                   np.broadcast_to(target, (B, 3)), strict=True)
-        return _stack([_result(*_solve_serial(
-            skeleton, serial, model, q, r, k, t, 1, False, method, tol, max_iter, col_weight,
-            lims, record, **options), method) for q, r, t in rows])
-    hinge_limits, ball_limit = _limits(skeleton, model, limits)
 
-    local_b = np.broadcast_to(local, (B, J, 4)).copy()
-    root_b = np.broadcast_to(root_pos, (B, 3)).copy()
-    if k == 0:  # the world frame is held and joint 0 sits at the root position
-        base, p_k, Q_k = np.broadcast_to(np.eye(3), (B, 3, 3)), root_b, None
-    else:
-        positions, orientations = fk.forward_kinematics(skeleton.parents, skeleton.offsets,
-                                                        local_b, root_b)
-        p_k, Q_k = positions[:, k], orientations[:, k]
-        base = matrix_from_quat(orientations[:, skeleton.parents[k]] if model.anchor_parent
-                                else Q_k)
-    Rn = np.broadcast_to(np.eye(3), (B, model.n_nodes, 3, 3)).copy()
-    has = model.edge_joint >= 0
-    Rn[:, has] = matrix_from_quat(local_b[:, model.edge_joint[has]])
-    problem = Problem(
-        model=model, Rn=Rn, base=base, p0=p_k,
-        target_pos=np.stack([np.broadcast_to(pos_t[j], (B, 3)) for j in pos_t], 1)
-        if pos_t else np.zeros((B, 0, 3)),
-        target_rot=np.stack([matrix_from_quat(np.broadcast_to(rot_t[j], (B, 4))) for j in rot_t],
-                            1) if rot_t else np.zeros((B, 0, 3, 3)),
-        col_weight=col_weight, hinge_limits=hinge_limits, ball_limit=ball_limit,
+_NUMBER = (int, float, np.integer, np.floating)  # a tuple: ``int | float`` is built per call
+
+
+def _is_number(x: Any) -> bool:
+    return isinstance(x, _NUMBER) and not isinstance(x, bool)
+
+
+def _result(solved: Solved, method: str) -> IKResult:
+    """The :class:`IKResult` of one problem (arrays without a batch axis, a history of floats)
+    or of a batch (arrays (B, ...)); the engine's frames are (local, positions)."""
+    history = solved.history
+    return IKResult(
+        local_rotations=solved.local,
+        root_position=solved.root_pos,
+        positions=solved.positions,
+        converged=history.converged,
+        iterations=history.iterations,
+        residuals=np.array(history.residuals),
+        reason=history.reasons(solved.unreachable),
+        method=method,
+        frames=None if solved.frames is None else [{"positions": p, "local_rotations": q}
+                                                   for q, p in solved.frames],
     )
-    problem.Rn = problem.project(problem.Rn)
-    if method != "two_link":
-        if serial is not None and serial.free_balls and not limits:
-            problem.Rn = problem.stretch_if_far(problem.Rn, tol)
-        problem.Rn = problem.bend_if_straight(problem.Rn, tol)
-
-    if method == "two_link":
-        Rn_out, history, frames = _two_link(problem, tol, record, **options)
-    elif method == "ccd":
-        Rn_out, history, frames = ccd.solve_problem(problem, tol, max_iter, record=record,
-                                                    **options)
-    elif method == "fabrik":
-        Rn_out, history, frames = fabrik.solve_problem(problem, tol, max_iter, record=record)
-    else:
-        Rn_out, history, frames = jacobian.solve_problem(problem, method, tol, max_iter,
-                                                         record=record, **options)
-
-    pose = _pose(skeleton, model, local_b, root_b, Q_k, p_k, Rn_out)
-    recorded = []
-    if record:
-        T = len(frames)
-        stacked = _pose(skeleton, model, np.tile(local_b, (T, 1, 1)), np.tile(root_b, (T, 1)),
-                        None if Q_k is None else np.tile(Q_k, (T, 1)), np.tile(p_k, (T, 1)),
-                        np.concatenate(frames, 0))
-        recorded = [(stacked[0][t * B:(t + 1) * B], stacked[2][t * B:(t + 1) * B])
-                    for t in range(T)]
-    unreachable = problem.unreachable() if len(model.effectors) else np.zeros(B, bool)
-    if not batched:  # one problem, solved as a batch of one
-        pose = [a[0] for a in pose]
-        recorded = [(q[0], p[0]) for q, p in recorded]
-        unreachable = unreachable[0]
-        history.unbatch()
-    return _result(*pose, history, unreachable, recorded if record else None, method)
-
-
-# Batches on the serial fast path smaller than this solve one problem at a time in Python
-# floats: the array engine pays a numpy call per component and step (~1 us, against ~50 ns
-# for a float), and for as many iterations as the batch's slowest problem needs. Crossovers
-# measured on the 7-bone chains of benchmarks/ik.py; the transpose method's slowest problems
-# take thousands of iterations, so its batches are never faster than its single solves.
-_BATCH_FROM = {"ccd": 256, "fabrik": 256, "fabrik_points": 64, "jacobian_transpose": math.inf,
-               "pseudo_inverse": 48, "dls": 48}
-
-
-def _batch_from(method: str, serial: SerialChain, limits: list) -> float:
-    """The smallest batch the array engine solves faster than a loop of single solves
-    (FABRIK on free balls iterates on points alone, a cheaper engine)."""
-    if method == "fabrik" and serial.free_balls and not limits:
-        return _BATCH_FROM["fabrik_points"]
-    return _BATCH_FROM[method]
 
 
 def _stack(results: list[IKResult]) -> IKResult:
     """One batch result from single ones: arrays (B, ...), residuals (T, B) and frames with
     every problem held at its last entry once it has stopped (as the array engine does)."""
+    if len(results) == 1:  # a batch of one: its arrays with a leading axis (a quarter the cost)
+        (one,) = results
+        return IKResult(
+            local_rotations=one.local_rotations[None], root_position=one.root_position[None],
+            positions=one.positions[None], converged=np.array([one.converged]),
+            iterations=np.array([one.iterations]), residuals=one.residuals[:, None],
+            reason=np.array([one.reason], dtype="<U14"), method=one.method,
+            frames=None if one.frames is None else [{k: v[None] for k, v in f.items()}
+                                                    for f in one.frames])
     residuals = np.empty((max(len(r.residuals) for r in results), len(results)))
     for i, r in enumerate(results):
         residuals[:len(r.residuals), i] = r.residuals
@@ -309,61 +384,6 @@ def _stack(results: list[IKResult]) -> IKResult:
     )
 
 
-# The options each method takes, and the values they accept: (test, what it must be).
-OPTIONS: dict[str, dict[str, tuple[Any, str]]] = {
-    "two_link": {"pole": (None, ""), "flip": (None, "")},
-    "ccd": {"tip_to_root": (None, ""),
-            "max_angle": (lambda x: x > 0, "a positive angle in radians (inf: no cap)")},
-    "fabrik": {},
-    **dict.fromkeys(jacobian.METHODS, {
-        # Its sixth power is a determinant in the closed-form step: beyond 1e50 it overflows.
-        "damping": (lambda x: 0 <= x <= 1e50, "a length in [0, 1e50]"),
-        "rcond": (lambda x: 0 <= x < 1, "a number in [0, 1)"),
-        "max_step": (lambda x: x > 0, "a positive angle in radians (inf: no cap)"),
-    }),
-}
-
-
-_NUMBER = (int, float, np.integer, np.floating)  # a tuple: ``int | float`` is built per call
-
-
-def _is_number(x: Any) -> bool:
-    return isinstance(x, _NUMBER) and not isinstance(x, bool)
-
-
-def _check_options(method: str, options: Mapping[str, Any]) -> None:
-    """``ValueError`` naming an option the method does not take or a value it cannot use
-    (NaN fails every test; ``None`` means the default)."""
-    allowed = OPTIONS[method]
-    unknown = set(options) - set(allowed)
-    if unknown:
-        raise ValueError(f"options: {sorted(unknown)} do not apply to method {method!r} "
-                         f"(it takes {sorted(allowed) or 'none'})")
-    for name, value in options.items():
-        test, what = allowed[name]
-        if test is not None and value is not None and not (_is_number(value) and test(value)):
-            raise ValueError(f"{name}: expected {what}, got {value!r}")
-
-
-def _result(local: Array, root_pos: Array, positions: Array, history: History,
-            unreachable: Any, frames: list[tuple[Array, Array]] | None,
-            method: str) -> IKResult:
-    """The :class:`IKResult` of one problem (arrays without a batch axis, a history of floats)
-    or of a batch (arrays (B, ...)); ``frames`` are (local, positions)."""
-    return IKResult(
-        local_rotations=local,
-        root_position=root_pos,
-        positions=positions,
-        converged=history.converged,
-        iterations=history.iterations,
-        residuals=np.array(history.residuals),
-        reason=history.reasons(unreachable),
-        method=method,
-        frames=None if frames is None else [{"positions": p, "local_rotations": q}
-                                            for q, p in frames],
-    )
-
-
 def _split_target(value: Any) -> tuple[Any, Any]:
     """``(position, orientation)`` of a target given as Target, pair or position."""
     if isinstance(value, Target):
@@ -375,7 +395,7 @@ def _split_target(value: Any) -> tuple[Any, Any]:
 
 @lru_cache(maxsize=128)
 def _cached_model(parents: tuple, offsets: bytes, kinds: tuple, root: int, eff: tuple,
-                  reff: tuple) -> tuple[ChainModel, SerialChain | None]:
+                  reff: tuple) -> tuple[TreeModel, SerialChain | None]:
     off = np.frombuffer(offsets).reshape(-1, 3)
     model = build_model(np.array(parents), off, list(kinds), root, list(eff), list(reff))
     return model, serial_chain(model)
@@ -387,7 +407,7 @@ _MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _model(skeleton: Any, root: int, eff: tuple,
-           reff: tuple) -> tuple[ChainModel, SerialChain | None]:
+           reff: tuple) -> tuple[TreeModel, SerialChain | None]:
     """The (cached) model, and its serial chain if it is one."""
     try:
         per_skeleton = _MODELS.setdefault(skeleton, {})
@@ -400,7 +420,7 @@ def _model(skeleton: Any, root: int, eff: tuple,
 
 
 def _model_by_value(skeleton: Any, root: int, eff: tuple,
-                    reff: tuple) -> tuple[ChainModel, SerialChain | None]:
+                    reff: tuple) -> tuple[TreeModel, SerialChain | None]:
     kinds = []
     for t in skeleton.joint_types:
         axis = getattr(t, "axis", None)
@@ -410,7 +430,7 @@ def _model_by_value(skeleton: Any, root: int, eff: tuple,
                          root, eff, reff)
 
 
-def _check_movable(skeleton: Any, model: ChainModel, root: int) -> None:
+def _check_movable(skeleton: Any, model: TreeModel, root: int) -> None:
     """``ValueError`` naming an effector that no joint between it and the fixed joint can
     move (all fixed, or only its own rotation free, which turns it in place)."""
     stuck = [e for nodes, mask in ((model.effectors, model.pos_mask),
@@ -439,7 +459,7 @@ def _position(x: Any, name: str) -> Array:
     return a
 
 
-def _check_hinges(skeleton: Any, model: ChainModel, local: Array) -> None:
+def _check_hinges(skeleton: Any, model: TreeModel, local: Array) -> None:
     """``ValueError`` naming a hinge the solve moves whose start rotation is not a turn about
     its own axis (a hinge solve keeps the off-axis part, so the answer would depend on how
     the problem was batched)."""
@@ -457,7 +477,7 @@ def _check_hinges(skeleton: Any, model: ChainModel, local: Array) -> None:
                 "give a turn about the hinge axis (quat_from_axis_angle(axis, angle))")
 
 
-def _weights(skeleton: Any, model: ChainModel, weights: Mapping | None) -> Array:
+def _weights(skeleton: Any, model: TreeModel, weights: Mapping | None) -> Array:
     if not weights:
         return model.unit_weights
     w = np.ones(model.n_cols)
@@ -469,263 +489,70 @@ def _weights(skeleton: Any, model: ChainModel, weights: Mapping | None) -> Array
     return w
 
 
-def _limits(skeleton: Any, m: ChainModel, limits: Mapping | None) -> tuple[Array, Array]:
-    """Hinge ranges (V, 2) and ball caps (V,) of the variables (``±inf`` / ``inf``: free)."""
-    hinge_limits = np.full((len(m.var_nodes), 2), [-np.inf, np.inf])
-    ball_limit = np.full(len(m.var_nodes), np.inf)
+def _limits(skeleton: Any, m: TreeModel, limits: Mapping | None) -> tuple[Limit | None, ...]:
+    """Each variable's :class:`Limit` (None: free), checked."""
+    if not limits:
+        return m.no_limits
+    out = list(m.no_limits)
     var_joint = m.edge_joint[m.var_nodes]
-    for key, value in (limits or {}).items():
+    for key, value in limits.items():
         j = skeleton.index(key)
-        hinge = getattr(skeleton.joint_types[j], "axis", None) is not None
-        v = np.flatnonzero(var_joint == j)
-        a = np.asarray(value) if not isinstance(value, str) else None
-        ok = a is not None and a.dtype.kind in "iuf" and not np.isnan(a).any()
-        if hinge:
-            if not (ok and a.shape in ((), (2,))):
-                raise ValueError(f"limits[{key!r}]: a hinge takes a range (lo, hi) or one angle "
-                                 f"a >= 0 for (-a, a), radians, got {value!r}")
-            lo, hi = (-float(a), float(a)) if a.ndim == 0 else (float(a[0]), float(a[1]))
-            if not lo <= hi:
-                raise ValueError(f"limits[{key!r}]: a hinge range needs lo <= hi (one angle: "
-                                 f">= 0), got {value!r}")
-            hinge_limits[v] = (lo, hi)
-        else:
-            if not (ok and a.ndim == 0 and a >= 0):
-                raise ValueError(f"limits[{key!r}]: a ball joint takes one largest angle "
-                                 f"(radians, >= 0), got {value!r}")
-            ball_limit[v] = float(a)
-    return hinge_limits, ball_limit
+        if j == 0 and not m.anchor_parent:
+            raise ValueError(
+                f"limits[{key!r}]: rooted at {skeleton.names[int(m.joints[0])]!r}, joint "
+                f"{skeleton.names[0]!r}'s rotation is the body's world orientation, which "
+                "follows from the solve (no joint turns it); limit the joints on the way")
+        lim = _joint_limit(skeleton, j, f"limits[{key!r}]", value)
+        for v in np.flatnonzero(var_joint == j):
+            out[v] = lim
+    return tuple(out)
 
 
-def _pose(skeleton: Any, model: ChainModel, local: Array, root_pos: Array, Qk: Array | None,
-          pk: Array, Rn: Array) -> tuple[Array, Array, Array]:
-    """Local rotations, root position and global positions of solved edge rotations."""
-    local = local.copy()
-    joints = model.edge_joint[model.var_nodes]
-    q = quat_from_matrix(Rn[:, model.var_nodes])
-    # Keep the sign of the starting quaternion, so an animated solve has no sign flips.
-    flip = np.einsum("bji,bji->bj", q, local[:, joints]) < 0
-    local[:, joints] = np.where(flip[..., None], -q, q)
-    if model.anchor_parent:
-        if model.n_nodes == len(local[0]) and model.joints[0] == 0:
-            # The paths cover the skeleton (a chain): the model's own FK has every position.
-            _, p = model.forward(Rn, np.broadcast_to(np.eye(3), Rn.shape[:1] + (3, 3)), root_pos)
-            positions = np.empty_like(p)
-            positions[:, model.joints] = p
-        else:
-            positions, _ = fk.forward_kinematics(skeleton.parents, skeleton.offsets, local,
-                                                 root_pos)
-        return local, root_pos, positions
-    k = int(model.joints[0])
-    positions, orientations = fk.forward_kinematics(
-        skeleton.parents, skeleton.offsets, local, pk, root=k, root_orientation=Qk)
-    local[:, 0] = orientations[:, 0]
-    return local, positions[:, 0].copy(), positions
+def _joint_limit(skeleton: Any, j: int, name: str, value: Any) -> Limit | None:
+    """The :class:`Limit` of joint ``j`` given as ``value`` (None: no actual limit)."""
+    axis = getattr(skeleton.joint_types[j], "axis", None)
+    if isinstance(value, SwingTwist):
+        if axis is not None:
+            raise ValueError(f"{name}: joint {skeleton.names[j]!r} is a hinge; give it a range "
+                             "(lo, hi), not a SwingTwist")
+        return _swing_twist(skeleton, j, name, value)
+    a = np.asarray(value) if not isinstance(value, str) else None
+    ok = a is not None and a.dtype.kind in "iuf" and not np.isnan(a).any()
+    if axis is None:
+        if not (ok and a.ndim == 0 and a >= 0):
+            raise ValueError(f"{name}: a ball joint takes one largest angle (radians, >= 0) or "
+                             f"a SwingTwist(max_swing, twist, axis), got {value!r}")
+        return Limit("cap", None, 0.0, float(a)) if np.isfinite(a) else None
+    if not (ok and a.shape in ((), (2,))):
+        raise ValueError(f"{name}: a hinge takes a range (lo, hi) or one angle a >= 0 for "
+                         f"(-a, a), radians, got {value!r}")
+    lo, hi = (-float(a), float(a)) if a.ndim == 0 else (float(a[0]), float(a[1]))
+    if not lo <= hi:
+        raise ValueError(f"{name}: a hinge range needs lo <= hi (one angle: >= 0), got {value!r}")
+    if not (math.isfinite(lo) or math.isfinite(hi)):
+        return None
+    return Limit("hinge", tuple(float(c) for c in axis), lo, hi)
 
 
-def _two_link(problem: Problem, tol: float, record: bool, pole: ArrayLike | None = None,
-              flip: bool = False) -> tuple[Array, History, list[Array]]:
-    """The analytic two-bone solve; a start already within ``tol`` is kept (0 iterations),
-    and a target the joints cannot reach (out of reach, off a hinge's plane) ends in their
-    closest pose, reported ``"unreachable"`` or ``"stalled"`` (never ``"max_iterations"``:
-    there is nothing to iterate)."""
-    m = problem.model
-    if m.n_nodes != 3 or len(m.effectors) != 1 or m.effectors[0] != 2:
-        raise ValueError(
-            "method: 'two_link' needs the path from root to the one effector to be two bones "
-            f"(three joints), got {m.n_nodes} joints; choose root accordingly")
-    M, p = problem.forward(problem.Rn)
-    history = History(problem.error(M, p)[1], tol, 1)
-    t = problem.target_pos[:, 0]
-    hip = np.flatnonzero(m.var_nodes == 0)
-    knee = np.flatnonzero(m.var_nodes == 1)
-    axes = problem._axes()
-    both = bool(not m.up.any() and len(hip) and len(knee))
-    if both and m.hinge[hip[0]]:
-        Rn = _two_link_hinge_hip(problem, p, t, axes[hip[0]],
-                                 axes[knee[0]] if m.hinge[knee[0]] else None, pole, flip)
-        b = problem.forward(Rn)[1][:, 1]
-    elif both and m.hinge[knee[0]]:
-        Rn, b, _ = _two_link_hinge_knee(problem, M, p, t, axes[knee[0]], pole, flip)
+def _swing_twist(skeleton: Any, j: int, name: str, value: SwingTwist) -> Limit:
+    """A swing–twist cone checked; its axis defaults to the joint's rest bone direction."""
+    cone, twist = value.max_swing, value.twist
+    if not (_is_number(cone) and 0 <= cone <= math.pi):
+        raise ValueError(f"{name}: max_swing must be an angle in [0, pi] radians, got {cone!r}")
+    if not (isinstance(twist, tuple | list) and len(twist) == 2 and all(map(_is_number, twist))
+            and -math.pi <= twist[0] <= twist[1] <= math.pi):
+        raise ValueError(f"{name}: twist must be a range (lo, hi) with -pi <= lo <= hi <= pi "
+                         f"radians, got {twist!r}")
+    if value.axis is None:
+        kids = [c for c in range(skeleton.n_joints) if skeleton.parents[c] == j]
+        axis = np.asarray(skeleton.offsets)[kids].sum(axis=0)
+        if not np.linalg.norm(axis) > 1e-12:
+            raise ValueError(f"{name}: joint {skeleton.names[j]!r} has no rest bone to twist "
+                             "about (no child offset); give SwingTwist(axis=...)")
     else:
-        Rn = problem.Rn
-        b, _, _ = two_link(p[:, 0], p[:, 1], p[:, 2], t, pole, flip)
-    # With both joints free each aims at its own point (exact: no least-squares compromise).
-    Rn = problem.fit(Rn, np.stack([p[:, 0], b, t], 1), subtree=not both)
-    if not history.active.any():  # every start within tolerance already: nothing to do
-        return problem.Rn, history, [problem.Rn] if record else []
-    Rn = np.where(history.active[:, None, None, None], Rn, problem.Rn)
-    history.update(problem.error(*problem.forward(Rn))[1])
-    history.stalled = ~history.converged
-    return Rn, history, [problem.Rn, Rn] if record else []
-
-
-def _two_link_hinge_hip(problem: Problem, p: Array, t: Array, hip_axis: Array,
-                        knee_axis: Array | None, pole: ArrayLike | None,
-                        flip: bool) -> Array:
-    r"""Two-link with a hinge root (the textbook arm): the hip can only swing the knee on the
-    circle :math:`b(\theta) = a + \exp(\theta[\hat a]_\times)(b_0 - a)` about its world axis
-    :math:`\hat a`, so the law of cosines becomes one equation in :math:`\theta`. With
-    :math:`v = b(\theta) - a` and :math:`w = t - a`, :math:`\lVert t - b\rVert = l_2` reads
-    :math:`v\cdot w = (l_1^2 + d^2 - l_2^2)/2`, and
-    :math:`v\cdot w = C + A\cos\theta + B\sin\theta` (:math:`C` the part along the axis), so
-    :math:`\theta = \varphi \pm \arccos\frac{K - C}{\sqrt{A^2 + B^2}}`,
-    :math:`\varphi = \mathrm{atan2}(B, A)`. When the knee is a hinge parallel to the hip (a
-    planar arm) the same holds in the plane: the parts along the axis drop out, so a target
-    off the plane gets the pose reaching its projection. Of the two roots (the elbow on
-    either side of the line to the target) the one nearer the pole, else the one bending as
-    the knee bends now (the smaller turn from a straight start); ``flip`` takes the other.
-    Out of reach the cosine is clipped: the arm stretches (or folds) towards the target.
-
-    Returns the edge rotations with the hip turned (and projected into its limits).
-    """
-    a, b0, c0 = p[:, 0], p[:, 1], p[:, 2]
-    ax = matvec(problem.base, hip_axis)
-    v, w, bone2 = b0 - a, t - a, c0 - b0
-    va, wa = dot(v, ax), dot(w, ax)
-    v_perp = v - va[:, None] * ax
-    side = cross(ax, v_perp)
-    K = 0.5 * (dot(v, v) + dot(w, w) - dot(bone2, bone2)) - va * wa
-    if knee_axis is not None and norm(cross(np.asarray(knee_axis), hip_axis)) < 1e-9:
-        h = dot(bone2, ax)  # a planar arm: solve in the plane (the axial parts drop out)
-        K = K - 0.5 * ((va - wa) ** 2 - h * h)
-    A, Bs = dot(v_perp, w), dot(side, w)
-    radius = np.hypot(A, Bs)
-    scale = problem.model.length_scale
-    cos = np.where(radius > 1e-12 * scale * scale, K / np.where(radius > 0, radius, 1.0), 1.0)
-    phi = np.arctan2(Bs, A)
-    half = np.arccos(np.clip(cos, -1.0, 1.0))
-    roots = np.stack([phi - half, phi + half], 1)  # (B, 2)
-    roots = (roots + np.pi) % (2 * np.pi) - np.pi
-    knees = (a[:, None] + np.cos(roots)[..., None] * v_perp[:, None]
-             + np.sin(roots)[..., None] * side[:, None] + va[:, None, None] * ax[:, None])
-    if pole is not None:
-        pole_pt = np.broadcast_to(as_array(pole, "pole", (3,)), a.shape)
-        first = norm(knees[:, 0] - pole_pt) <= norm(knees[:, 1] - pole_pt)
-    else:
-        now = dot(ax, cross(v, c0 - a))  # which way the knee bends now, about the hip axis
-        bend = dot(ax[:, None], cross(knees - a[:, None], w[:, None]))
-        straight = np.abs(now) <= 1e-9 * scale * scale
-        first = np.where(straight, np.abs(roots[:, 0]) <= np.abs(roots[:, 1]),
-                         bend[:, 0] * now >= bend[:, 1] * now)
-    theta = np.where(first != flip, roots[:, 0], roots[:, 1])
-    Rn = problem.Rn.copy()
-    Rn[:, 0] = rotvec_matrix(hip_axis * theta[:, None]) @ Rn[:, 0]
-    return problem.project(Rn)
-
-
-def _two_link_hinge_knee(problem: Problem, M: Array, p: Array, t: Array, knee_axis: Array,
-                         pole: ArrayLike | None, flip: bool) -> tuple[Array, Array, Array]:
-    r"""Two-link with a ball root and a hinge middle joint (hip and knee): the leg's plane
-    must be perpendicular to the knee axis, which turns with the hip. So the plane is chosen
-    first: through the root-to-target axis :math:`\hat u` and the pole, or without a pole the
-    plane whose normal is nearest the knee's world axis :math:`a = Q_{hip}\hat a` (its part
-    perpendicular to :math:`\hat u`, bending to the side the knee bends now). The law of
-    cosines places the knee in it (:func:`two_link`), and the hip turns (Kabsch on the two
-    directions) so that its bone points at the new knee and the knee axis along the plane's
-    normal; the knee's own turn about its axis then lands the end on the target.
-
-    Returns the edge rotations with the hip turned, and the new knee and end positions.
-    """
-    a, b0, c0 = p[:, 0], p[:, 1], p[:, 2]
-    axis = matvec(M[:, 0], knee_axis)
-    u = np.where((norm(t - a) > TINY)[:, None], t - a, c0 - a)
-    u = u / np.maximum(norm(u), TINY)[:, None]
-    if pole is None:
-        n = axis - dot(axis, u)[:, None] * u
-        side = cross(u, n)  # a knee bent by a positive turn about n has its joint on this side
-        bent = b0 - a - dot(b0 - a, u)[:, None] * u
-        side = np.where((dot(bent, side) < 0)[:, None], -side, side)
-        planar = norm(n) > 1e-9
-        pole_pt = np.where(planar[:, None], a + side, b0)  # knee axis along u: keep the plane
-    else:
-        pole_pt = np.broadcast_to(as_array(pole, "pole", (3,)), a.shape)
-    b, c, _ = two_link(a, b0, c0, t, pole_pt, flip)
-    n = cross(b - a, c - a)
-    n = np.where((norm(n) > TINY)[:, None], n, cross(u, pole_pt - a))
-    n = n / np.maximum(norm(n), TINY)[:, None]
-    n = np.where((dot(n, axis) < 0)[:, None], -n, n)  # the nearer of the two normals
-    turn = best_rotation(np.stack([b0 - a, axis], 1), np.stack([b - a, n * norm(b0 - a)[:, None]],
-                                                               1))
-    Rn = problem.Rn.copy()
-    Rn[:, 0] = orthonormalize(np.swapaxes(problem.base, -1, -2) @ turn @ M[:, 0])
-    return problem.project(Rn), b, c
-
-
-def _solve_serial(
-    skeleton: Any, chain: SerialChain, model: ChainModel, local: Array, root_pos: Array, k: int,
-    target: Array, B: int, batched: bool, method: str, tol: float, max_iter: int,
-    col_weight: Array, limits: list[tuple], record: bool, damping: float | None = None,
-    rcond: float = 1e-6, max_step: float = 0.5, tip_to_root: bool = True,
-    max_angle: float | None = None,
-) -> tuple[Array, Array, Array, History, Any, list[tuple[Array, Array]] | None]:
-    """CCD, FABRIK or a Jacobian method on a serial chain (:mod:`course.ik._serial`): one
-    problem in Python floats (``local`` (J, 4), ``root_pos`` and ``target`` (3,)), or a batch
-    on component arrays. Returns local rotations, root position and positions (with a batch's
-    leading ``B``), the history, whether each target is out of reach and the recorded
-    (local, positions) frames."""
-    ops = ARRAYS if batched else FLOATS
-    joints = list(chain.joints)
-    if batched:
-        local = np.broadcast_to(local, (B, skeleton.n_joints, 4))
-        root_pos = np.broadcast_to(root_pos, (B, 3))
-    if k == 0:  # the world frame is held and joint 0 sits at the root position
-        base, p0 = (1.0, 0.0, 0.0, 0.0), _components(root_pos, ops)
-    else:
-        positions, orientations = fk.forward_kinematics(skeleton.parents, skeleton.offsets,
-                                                        local, root_pos)
-        base = _components(orientations[..., skeleton.parents[k], :], ops)
-        p0 = _components(positions[..., k, :], ops)
-    if ops is FLOATS:
-        rows = local.tolist()
-        start = [tuple(rows[j]) for j in joints]
-        target = tuple(target.tolist())
-    else:
-        start = [_components(local[:, j], ops) for j in joints]
-        target = _components(np.broadcast_to(target, (B, 3)), ops)
-    R = start
-    if limits:
-        R = chain.project(R, limits, ops)
-    elif chain.free_balls:  # at or beyond the reach: the stretched pose (see stretch_if_far)
-        R = chain.stretch_if_far(R, base, p0, target, tol, ops)
-    if method == "fabrik" and chain.free_balls and not limits:  # positions alone suffice
-        R, P, history, frames = solve_fabrik(chain, R, base, p0, target, tol, max_iter, record,
-                                             ops)
-    elif method == "fabrik":
-        R, P, history, frames = solve_fabrik_joints(chain, R, base, p0, target, tol, max_iter,
-                                                    limits, record, ops)
-    elif method == "ccd":
-        R, P, history, frames = solve_ccd(chain, R, base, p0, target, tol, max_iter,
-                                          tip_to_root=tip_to_root, max_angle=max_angle,
-                                          limits=limits, record=record, ops=ops)
-    else:
-        if damping is None:
-            damping = jacobian.DEFAULT_DAMPING * model.length_scale
-        R, P, history, frames = solve_jacobian(
-            chain, R, base, p0, target, method, tol, max_iter,
-            inv_w2=tuple((1.0 / col_weight**2).tolist()), damping=damping, rcond=rcond,
-            max_step=max_step, limits=limits, record=record, ops=ops)
-
-    covers = chain.joints == tuple(range(skeleton.n_joints))  # a chain skeleton: its own FK
-
-    def pose(R: list, P: list | None = None) -> tuple[Array, Array]:
-        """Local rotations (unit, in the starting quaternions' signs) and positions of ``R``;
-        ``P``, if given, are the chain's positions of ``R`` already computed."""
-        q = ops.stack(units_like(R, start, ops), B)
-        if covers:  # every joint is on the chain
-            return q, ops.stack(chain.forward(R, base, p0)[1] if P is None else P, B)
-        out = local.copy()
-        out[..., joints, :] = q
-        return out, fk.forward_kinematics(skeleton.parents, skeleton.offsets, out, root_pos)[0]
-
-    local_out, positions = pose(R, P)
-    recorded = [pose(f) for f in frames] if record else None
-    unreachable = chain.unreachable(target, p0, ops)
-    return local_out, root_pos.copy(), positions, history, unreachable, recorded
-
-
-def _components(a: Array, ops: Any) -> tuple:
-    """(c,) -> c floats for one problem; (B, c) -> c contiguous (B,) rows for a batch."""
-    if ops is FLOATS:
-        return tuple(a.tolist())
-    return tuple(np.ascontiguousarray(a.T))
+        axis = as_array(value.axis, f"{name} axis", (3,))
+        if axis.ndim != 1 or not np.linalg.norm(axis) > 1e-12:
+            raise ValueError(f"{name} axis: expected a non-zero vector (3,), got {value.axis!r}")
+    axis = axis / np.linalg.norm(axis)
+    return Limit("swing_twist", tuple(axis.tolist()), float(twist[0]), float(twist[1]),
+                 float(cone))

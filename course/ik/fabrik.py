@@ -1,6 +1,7 @@
 r"""FABRIK: Forward And Backward Reaching Inverse Kinematics (Aristidou & Lasenby 2011).
 
-FABRIK works on joint *positions*. With bone lengths :math:`d_i = \lVert p_{i+1} - p_i\rVert`:
+FABRIK works on joint *positions*. With bone lengths :math:`d_i = \lVert p_{i+1} - p_i\rVert`
+(:func:`fabrik_positions` is the loop below, batched over leading dimensions):
 
 * **forward reaching** (end to root): put the end effector on the target,
   :math:`p_n \leftarrow t`, then pull each joint towards its successor,
@@ -33,23 +34,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._chains import Problem
-from ._ops import ARRAYS
-from ._serial import fabrik_points
-from ._small import TINY, norm
-from .result import History
+from course._typing import Array
+from course._validate import as_array
 
-Array = NDArray[np.float64]
-
-
-def _toward(frm: Array, to: Array, length: Array, fallback: Array) -> Array:
-    """``frm + length * unit(to - frm)``; ``fallback`` direction where ``to == frm``."""
-    d = to - frm
-    n = np.sqrt((d * d).sum(-1))
-    if (n < TINY).any():
-        d = np.where((n < TINY)[..., None], fallback, d)
-        n = np.where(n < TINY, 1.0, n)
-    return frm + (length / n)[..., None] * d
+from ._engine.small import TINY
 
 
 def fabrik_positions(
@@ -81,8 +69,6 @@ def fabrik_positions(
     ValueError
         If an argument has the wrong shape or is not finite.
     """
-    from course.rotations._checks import as_array
-
     P = as_array(positions, "positions", (3,))
     t = as_array(target, "target", (3,))
     if P.ndim < 2 or P.shape[-2] < 2:
@@ -91,7 +77,7 @@ def fabrik_positions(
     n = P.shape[-2]
     P = np.broadcast_to(P, batch + (n, 3)).reshape(-1, n, 3).copy()
     t = np.broadcast_to(t, batch + (3,)).reshape(-1, 3)
-    its, err = _fabrik_chain(P, t, tol, max_iter)
+    its, err = _fabrik(P, t, tol, max_iter)
     return P.reshape(batch + (n, 3)), its.reshape(batch), err.reshape(batch)
 
 
@@ -104,84 +90,91 @@ def fabrik_batch(
                             == 2 else positions, targets, tol, max_iter)
 
 
-def _fabrik_chain(P: Array, t: Array, tol: float, max_iter: int,
-                  errors: list | None = None) -> tuple[Array, Array]:
-    """In-place FABRIK on (B, n, 3) chains; returns iterations and errors, both (B,);
-    ``errors``, if given, receives the (B,) errors after every iteration.
-
-    Runs :func:`course.ik._serial.fabrik_points` on component-major storage (each coordinate
-    of each joint one contiguous (B,) row)."""
-    comps = np.array(P.transpose(1, 2, 0))  # (n, 3, B), a copy the solver may write into
-    points, its, err = fabrik_points([tuple(c) for c in comps], tuple(np.array(t.T)), tol,
-                                     max_iter, ARRAYS, errors=errors)
-    P[:] = np.moveaxis(np.array(points), -1, 0)
+def _fabrik(P: Array, t: Array, tol: float, max_iter: int) -> tuple[Array, Array]:
+    """FABRIK in place on chains ``P`` (B, n, 3) and targets ``t`` (B, 3); returns the
+    iterations and errors, (B,) each. Each iteration runs only the problems still going."""
+    lengths, rest = _bones(P)
+    root = P[:, 0].copy()
+    to_t = t - root
+    dist = _length(to_t.T)
+    far = dist > lengths.sum(axis=0)
+    if far.any():  # out of reach: the chain stretched straight at the target, in one pass
+        u = to_t * (1.0 / np.where(dist > TINY, dist, 1.0))[:, None]
+        reach = np.concatenate([np.zeros((1, len(P))), np.cumsum(lengths, axis=0)])
+        P[far] = (root[:, None] + u[:, None] * reach.T[..., None])[far]
+    err = _length((P[:, -1] - t).T)
+    its = far.astype(int)
+    active = ~far & (err >= tol)
+    # Joint by joint, coordinate rows: p_i is (3, B), so each step runs on contiguous rows.
+    joints = list(P.transpose(1, 2, 0).copy())
+    t, root, rest = t.T, root.T, rest.transpose(0, 2, 1)
+    for _ in range(max_iter):
+        run = np.flatnonzero(active)
+        if not len(run):
+            break
+        every = len(run) == len(P)  # every problem still going: no need to pick
+        p, tr, d, r, b = (list(joints), t, lengths, rest, root) if every else (
+            [q[:, run] for q in joints], t[:, run], lengths[:, run], rest[..., run], root[:, run])
+        forward_reaching(p, tr, d, r)
+        backward_reaching(p, b, d, r)
+        joints = p if every else [_put(q, run, new) for q, new in zip(joints, p, strict=True)]
+        err[run] = _length(p[-1] - tr)
+        its[run] += 1
+        active[run] = err[run] >= tol
+    P[:] = np.array(joints).transpose(2, 0, 1)
     return its, err
 
 
-def solve_problem(
-    problem: Problem, tol: float, max_iter: int, record: bool = False
-) -> tuple[Array, History, list[Array]]:
-    """FABRIK on a :class:`~course.ik._chains.Problem` (any tree of paths, several effectors).
-
-    Plain chains of unconstrained ball joints iterate on positions alone and fit rotations
-    once at the end (exact: the positions are reachable). Otherwise the backward pass is done
-    in joint space, level by level (:meth:`Problem.fit`), so the branch rigidity, hinge axes
-    and limits shape every iteration and every residual is that of a real pose.
-    """
-    m = problem.model
-    if len(m.rot_effectors):
-        raise ValueError("targets: FABRIK reaches positions only; use a Jacobian method "
-                         "(e.g. method='dls') for orientation targets")
-    Rn = problem.Rn
-    _, p = problem.forward(Rn)
-    lengths = norm(m.bone)
-    branching = np.bincount(m.parent[1:], minlength=m.n_nodes).max() > 1
-    free = (not branching and not m.hinge.any() and not np.isfinite(problem.ball_limit).any()
-            and len(m.effectors) == 1 and m.effectors[0] == m.n_nodes - 1 and not record)
-    err = norm(problem.target_pos - p[:, m.effectors]).max(axis=1)
-    if free:
-        P, errors = p.copy(), []
-        its, err = _fabrik_chain(P, problem.target_pos[:, 0], tol, max_iter, errors)
-        Rn = problem.fit_free(Rn, P)
-        history = History(norm(problem.target_pos - p[:, m.effectors]).max(axis=1), tol, max_iter)
-        history.iterations = its
-        # The points' errors stand for the iterations; the last is that of the fitted pose.
-        history.residuals += errors[:-1]
-        history.residuals.append(problem.error(*problem.forward(Rn))[1])
-        history.active[:] = False
-        return Rn, history, []
-
-    history = History(err, tol, max_iter)
-    frames = [Rn] if record else []
-    count = np.bincount(m.parent[1:], minlength=m.n_nodes).astype(float)
-    is_eff = np.zeros(m.n_nodes, dtype=bool)
-    is_eff[m.effectors] = True
-    deepest_first = m.levels[:0:-1]
-    while history.active.any():
-        P = p.copy()
-        P[:, m.effectors] = problem.target_pos
-        old = p
-        for lvl in deepest_first:  # forward reaching, sub-bases to the centroid
-            par = m.parent[lvl]
-            fallback = old[:, par] - old[:, lvl]
-            fallback /= np.maximum(norm(fallback), TINY)[..., None]
-            proposal = _toward(P[:, lvl], P[:, par], lengths[lvl], fallback)
-            acc = np.zeros_like(P)
-            np.add.at(acc, (slice(None), par), proposal)
-            moved = np.unique(par)
-            keep = moved[is_eff[moved]]
-            P[:, moved] = acc[:, moved] / count[moved][:, None]
-            P[:, keep] = _targets_at(problem, keep)
-        new = problem.fit(Rn, P)  # backward reaching from the fixed joint, in joint space
-        Rn = np.where(history.active[:, None, None, None], new, Rn)
-        M, p = problem.forward(Rn)
-        history.update(problem.error(M, p)[1])
-        if record:
-            frames.append(Rn)
-    return Rn, history, frames
+def forward_reaching(p: list[Array], target: Array, lengths: Array, rest: Array) -> None:
+    r"""FABRIK's forward pass, in place on the joint positions ``p`` (n arrays (3, B)): the
+    end effector onto the target, :math:`p_{n-1} \leftarrow t`, then each joint pulled
+    towards its successor, :math:`p_i \leftarrow p_{i+1} + d_i\,\widehat{(p_i - p_{i+1})}`,
+    down to the root. ``lengths`` (n-1, B) are the bones :math:`d_i`, ``rest`` (n-1, 3, B)
+    their unit directions, used where two joints coincide."""
+    p[-1] = target
+    for i in range(len(p) - 2, -1, -1):
+        p[i] = _toward(p[i + 1], p[i], lengths[i], -rest[i])
 
 
-def _targets_at(problem: Problem, nodes: NDArray[np.int_]) -> Array:
-    """Targets of effector ``nodes``, (B, len(nodes), 3)."""
-    where = {int(e): i for i, e in enumerate(problem.model.effectors)}
-    return problem.target_pos[:, [where[int(u)] for u in nodes]]
+def backward_reaching(p: list[Array], root: Array, lengths: Array, rest: Array) -> None:
+    r"""FABRIK's backward pass, in place: the root back, :math:`p_0 \leftarrow b`, then each
+    joint pulled towards its predecessor,
+    :math:`p_{i+1} \leftarrow p_i + d_i\,\widehat{(p_{i+1} - p_i)}`, out to the end."""
+    p[0] = root
+    for i in range(len(p) - 1):
+        p[i + 1] = _toward(p[i], p[i + 1], lengths[i], rest[i])
+
+
+def _toward(fixed: Array, moved: Array, length: Array, fallback: Array) -> Array:
+    """``fixed + length * unit(moved - fixed)`` (3, B); along ``fallback`` where the two
+    points coincide (no direction to keep)."""
+    d = moved - fixed
+    n = _length(d)
+    if (n < TINY).any():
+        d = np.where(n < TINY, fallback, d)
+        n = np.where(n < TINY, 1.0, n)
+    return fixed + d * (length / n)
+
+
+def _bones(P: Array) -> tuple[Array, Array]:
+    """Bone lengths (n-1, B) and unit bone directions (n-1, B, 3) of chains ``P`` (B, n, 3)
+    (+y for a zero bone)."""
+    d = np.moveaxis(P[:, 1:] - P[:, :-1], 1, 0)
+    lengths = _length(np.moveaxis(d, -1, 0))
+    ok = lengths > TINY
+    rest = np.where(ok[..., None], d * (1.0 / np.where(ok, lengths, 1.0))[..., None],
+                    [0.0, 1.0, 0.0])
+    return lengths, rest
+
+
+def _put(full: Array, run: NDArray[np.intp], part: Array) -> Array:
+    """A copy of ``full`` (3, B) with its columns ``run`` replaced by ``part``."""
+    out = full.copy()
+    out[:, run] = part
+    return out
+
+
+def _length(v: Array) -> Array:
+    r"""Euclidean length :math:`\sqrt{x^2 + y^2 + z^2}` of vectors ``v`` (3, ...)."""
+    x, y, z = v
+    return np.sqrt(x * x + y * y + z * z)

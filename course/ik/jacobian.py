@@ -20,7 +20,7 @@ Each iteration linearises forward kinematics around the current pose,
 
 The columns: hinge joint *i* with world axis :math:`a_i` at :math:`r_i` contributes
 :math:`a_i \times (e - r_i)`; a ball joint three such columns for the world axes x, y, z
-(its increment is a rotation vector in world space, see :mod:`course.ik._chains`).
+(its increment is a rotation vector in world space, see :mod:`course.ik._engine.tree`).
 """
 
 from __future__ import annotations
@@ -30,15 +30,9 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._chains import Problem
-from ._small import cross
-from .result import History
+from course._typing import Array
 
-Array = NDArray[np.float64]
-
-METHODS = ("jacobian_transpose", "pseudo_inverse", "dls")
-# DLS damping when none is given, as a share of the longest path to an effector.
-DEFAULT_DAMPING = 0.05
+from ._engine.small import cross
 
 
 def chain_jacobian(pivots: ArrayLike, axes: ArrayLike, effector: ArrayLike) -> Array:
@@ -184,84 +178,3 @@ def lost_rank(J: Array, rcond: float = 1e-6) -> NDArray[np.bool_]:
         return np.zeros(J.shape[:-2], dtype=bool)
     s = np.linalg.svd(J, compute_uv=False)
     return s[..., rank - 1] <= rcond * s[..., 0]
-
-
-def solve_problem(
-    problem: Problem,
-    method: str,
-    tol: float,
-    max_iter: int,
-    damping: float | None = None,
-    rcond: float = 1e-6,
-    max_step: float = 0.5,
-    record: bool = False,
-) -> tuple[Array, History, list[Array]]:
-    r"""Iterate one Jacobian method on a :class:`~course.ik._chains.Problem`.
-
-    ``max_step`` caps the largest joint increment per iteration (radians; the step keeps its
-    direction), so a far target is approached in several linearised steps. A step that
-    increases the objective :math:`\lVert\Delta e\rVert` (all effectors' errors together) is
-    undone and the next one halved (backtracking), so it never grows; when it stalls the
-    solve stops (``reason="stalled"``, ``"singular"`` or ``"unreachable"``). ``damping``
-    defaults to 5% of the longest path to an effector (a length, like the errors it is added
-    to).
-
-    Returns
-    -------
-    Rn : ndarray, shape (B, N, 3, 3)
-        Final edge rotations.
-    history : History
-    frames : list of ndarray
-        Edge rotations before the first and after each iteration (``record=True``).
-    """
-    if method not in METHODS:
-        raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
-    m = problem.model
-    if damping is None:
-        damping = DEFAULT_DAMPING * m.length_scale
-    w = problem.col_weight
-    uniform = bool(np.all(w == 1.0))
-    Rn = problem.Rn
-    M, p = problem.forward(Rn)
-    e, err = problem.error(M, p)
-    # The objective every step reduces: the length of the whole error vector,
-    # sqrt(sum of squares) (one effector: its error).
-    size = np.sqrt((e * e).sum(axis=1))
-    history = History(err, tol, max_iter, progress=size)
-    frames = [Rn] if record else []
-    scale = np.ones(problem.batch)
-    while history.active.any() and m.n_cols:
-        J = m.jacobian(M, p, problem.base)
-        Jw = J if uniform else J / w  # substitute y = W dtheta (see module docstring)
-        if method == "dls":
-            y = dls_step(Jw, e, damping)
-        elif method == "pseudo_inverse":
-            y = pinv_step(Jw, e, rcond)
-        else:
-            y = transpose_step(Jw, e)
-        delta = y if uniform else y / w
-        big = np.abs(delta).max(axis=1, keepdims=True)
-        delta = delta * np.minimum(1.0, max_step / np.maximum(big, 1e-300))
-        delta = np.where(history.active[:, None], delta * scale[:, None], 0.0)
-        trial = problem.project(m.step(Rn, M, problem.base, delta))
-        M_t, p_t = problem.forward(trial)
-        e_t, err_t = problem.error(M_t, p_t)
-        size_t = np.sqrt((e_t * e_t).sum(axis=1))
-        # Backtracking: a step that made the objective worse is undone and the next one
-        # halved. (Not the largest effector error: with several effectors a good step may
-        # trade a little of one for much of another.)
-        worse = size_t > size
-        scale = np.where(worse, 0.5 * scale, np.minimum(1.0, 2.0 * scale))
-        keep = ~worse
-        Rn = np.where(keep[:, None, None, None], trial, Rn)
-        M = np.where(keep[:, None, None, None], M_t, M)
-        p = np.where(keep[:, None, None], p_t, p)
-        e = np.where(keep[:, None], e_t, e)
-        err = np.where(keep, err_t, err)
-        size = np.where(keep, size_t, size)
-        history.update(err, progress=size)
-        if record:
-            frames.append(Rn)
-    if m.n_cols and not history.converged.all():
-        history.singular = lost_rank(m.jacobian(M, p, problem.base), rcond)
-    return Rn, history, frames

@@ -1,16 +1,13 @@
-"""What every solver returns, and the bookkeeping the iterative solvers share."""
+"""What :func:`course.ik.solve` takes as a target and returns."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._ops import ARRAYS, FLOATS
-
-Array = NDArray[np.float64]
+from course._typing import Array
 
 
 @dataclass(frozen=True)
@@ -19,13 +16,46 @@ class Target:
 
     Parameters
     ----------
-    position : array_like, shape (3,) or (B, 3)
+    position : array_like, shape (3,) or (B, 3), or None
+        None: an orientation alone.
     orientation : array_like, shape (4,) or (B, 4), optional
         Unit quaternion (w, x, y, z) the joint's global orientation ``Q_j`` should reach.
+    weight_position, weight_orientation : float
+        How much this target's position and orientation errors count against the other
+        targets' (relative: a solve divides them by the largest; each method's record in
+        :data:`course.ik.methods.REGISTRY` says how it weighs them). They matter where
+        targets compete (a pose that cannot meet them all), not for one target alone.
     """
 
-    position: ArrayLike
+    position: ArrayLike | None
     orientation: ArrayLike | None = None
+    weight_position: float = 1.0
+    weight_orientation: float = 1.0
+
+
+@dataclass(frozen=True)
+class SwingTwist:
+    r"""A ball joint's limit as a cone on the swing and a range on the twist (shoulders, hips).
+
+    The local rotation splits as :math:`R = s\otimes t`
+    (:func:`course.rotations.swing_twist`): the swing :math:`s` may turn the bone axis by at
+    most ``max_swing`` from its rest direction, the twist :math:`t` about it lies in ``twist``.
+    Solvers project with :func:`course.rotations.clamp_swing_twist`.
+
+    Parameters
+    ----------
+    max_swing : float
+        Half-angle of the cone, radians in :math:`[0, \pi]`.
+    twist : (lo, hi)
+        Twist range, radians, :math:`-\pi \le lo \le hi \le \pi`; default free.
+    axis : array_like, shape (3,), optional
+        Twist axis in the joint's local frame; default the joint's rest bone direction (its
+        child's offset; several children: the direction of their offsets' sum).
+    """
+
+    max_swing: float
+    twist: tuple[float, float] = (-np.pi, np.pi)
+    axis: ArrayLike | None = None
 
 
 @dataclass
@@ -50,8 +80,10 @@ class IKResult:
         ``""`` when converged, else ``"unreachable"`` (no pose reaches: the best, stretched
         pose is returned), ``"singular"`` (a Jacobian method stalled where the Jacobian has
         lost rank, so no step can reduce the remaining error), ``"max_iterations"`` (still
-        making progress when the iteration cap was hit) or ``"stalled"`` (no more progress:
-        a local minimum or a constrained chain).
+        making progress when the iteration cap was hit), ``"stalled"`` (no more progress:
+        a local minimum) or ``"limits"`` (the joint limits keep it from the target: the same
+        method from the same start, with the same ``tol`` and ``max_iter``, reaches it
+        without them).
     frames : list of dict, optional
         With ``record=True``: the pose before the first and after every iteration, each a
         dict with ``"positions"`` ``([B,] J, 3)`` and ``"local_rotations"`` ``([B,] J, 4)``.
@@ -72,77 +104,3 @@ class IKResult:
     def error(self) -> float | Array:
         """The final residual (largest effector error)."""
         return self.residuals[-1]
-
-
-class History:
-    """Per-problem convergence bookkeeping for one problem or a batch of ``B``.
-
-    ``update(err)`` records the largest effector error of every problem and returns the mask
-    of problems still running (not converged, not stalled, below ``max_iter``). With ``ops``
-    :data:`~course.ik._ops.FLOATS` (one problem on the serial fast path) errors are floats and
-    flags bools, which spares a single solve a numpy call per entry; with
-    :data:`~course.ik._ops.ARRAYS` (the default) they are arrays (B,).
-    """
-
-    # A problem has stalled when its error (or the objective it minimises) fell by less than
-    # this fraction of the tolerance over the last ``window`` iterations.
-    window = 8
-
-    def __init__(self, err: Any, tol: float, max_iter: int, progress: Any = None,
-                 ops: Any = ARRAYS):
-        """``progress`` (B,), if given, is the starting objective the stall test then watches
-        (see :meth:`update`)."""
-        self.tol, self.max_iter, self.ops = tol, max_iter, ops
-        self.residuals = [ops.copy(err)]
-        self._progress: list = [] if progress is None else [ops.copy(progress)]
-        self.iterations = ops.full(err, 0)
-        self.stalled = ops.full(err, False)
-        self.active = err >= tol if max_iter > 0 else ops.full(err, False)
-        # Set by the Jacobian methods: the final Jacobian has lost rank.
-        self.singular = ops.full(err, False)
-
-    def update(self, err: Any, progress: Any = None) -> Any:
-        """Record ``err`` (B,); ``progress`` (B,), if given, is the objective the solver
-        reduces (a length), which the stall test watches instead of ``err``."""
-        ops = self.ops
-        prev = self.residuals[-1]
-        err = ops.where(self.active, err, prev)
-        self.iterations += self.active
-        self.residuals.append(err)
-        watched = self.residuals
-        if progress is not None:
-            self._progress.append(progress)
-            watched = self._progress
-        if len(watched) > self.window:
-            old, new = watched[-1 - self.window], watched[-1]
-            self.stalled |= self.active & (old - new < 1e-3 * self.tol)
-        self.active = ((err >= self.tol) & ops.invert(self.stalled)
-                       & (self.iterations < self.max_iter))
-        return self.active
-
-    def unbatch(self) -> None:
-        """Turn the bookkeeping of a batch of one into that problem's own (floats, ints and
-        bools, as with :data:`~course.ik._ops.FLOATS`)."""
-        self.residuals = [r.item() for r in self.residuals]
-        self._progress = [p.item() for p in self._progress]
-        self.iterations, self.stalled, self.active, self.singular = (
-            a.item() for a in (self.iterations, self.stalled, self.active, self.singular))
-        self.ops = FLOATS
-
-    @property
-    def error(self) -> Any:
-        return self.residuals[-1]
-
-    @property
-    def converged(self) -> Any:
-        return self.error < self.tol
-
-    def reasons(self, unreachable: Any) -> Any:
-        """Why each problem stopped: ``""`` converged, else the most informative reason
-        (one problem: a str; a batch: an array of str)."""
-        where = self.ops.where
-        # Singular only where the solve stalled on a lost-rank Jacobian: one that merely ran
-        # out of iterations was still making progress, whatever its last Jacobian.
-        stopped = where(self.stalled, where(self.singular, "singular", "stalled"),
-                        "max_iterations")
-        return where(self.converged, "", where(unreachable, "unreachable", stopped))

@@ -23,9 +23,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._small import TINY, cross, dot, norm
+from course._typing import Array
+from course._validate import as_array
 
-Array = NDArray[np.float64]
+from ._engine.small import TINY, cross, dot, norm
 
 
 def _perpendicular(u: Array) -> Array:
@@ -67,8 +68,6 @@ def two_link(
     ValueError
         If an argument has the wrong shape or is not finite.
     """
-    from course.rotations._checks import as_array
-
     a, b, c = (as_array(x, n, (3,)) for x, n in ((root, "root"), (mid, "mid"), (end, "end")))
     t = as_array(target, "target", (3,))
     pole_pt = b if pole is None else as_array(pole, "pole", (3,))

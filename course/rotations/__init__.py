@@ -42,6 +42,7 @@ from .quaternion import (
     quat_normalize,
     quat_rotate,
 )
+from .swing_twist import clamp_swing_twist, swing_angle, swing_twist, twist_angle
 from .vectors import quat_between, skew
 
 __all__ = [
@@ -52,6 +53,7 @@ __all__ = [
     "TAIT_BRYAN_ORDERS",
     "axis_angle_from_matrix",
     "axis_angle_from_quat",
+    "clamp_swing_twist",
     "euler_from_matrix",
     "euler_from_quat",
     "gimbal_lock_distance",
@@ -79,4 +81,7 @@ __all__ = [
     "rotvec_from_quat",
     "skew",
     "slerp",
+    "swing_angle",
+    "swing_twist",
+    "twist_angle",
 ]

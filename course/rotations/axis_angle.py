@@ -19,13 +19,12 @@ degrees). All functions broadcast over leading dimensions.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._checks import as_array, as_unit, broadcast_leading
-from .quaternion import _canonical, quat_from_matrix, quat_normalize
-from .vectors import _skew
-
-Array = NDArray[np.float64]
+from .._typing import Array
+from .._validate import as_array, as_unit, broadcast_leading, norm, unit
+from . import _kernels
+from .quaternion import quat_from_matrix, quat_normalize
 
 DEFAULT_AXIS = np.array([1.0, 0.0, 0.0])
 DEFAULT_AXIS.flags.writeable = False
@@ -94,14 +93,19 @@ def axis_angle_from_quat(q: ArrayLike, degrees: bool = False) -> tuple[Array, Ar
     ValueError
         If ``q`` is the zero quaternion, has a bad shape or non-finite values.
     """
-    q = _canonical(quat_normalize(q))
+    q = _kernels.quat_canonical(quat_normalize(q))
     # _canonical may keep a tiny negative w (|w| < 1e-15); flip it so the angle stays <= pi.
     q = np.where(q[..., :1] < 0, -q, q)
     v = q[..., 1:]
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
-    axis = np.where(n > 0, v / np.where(n > 0, n, 1.0), DEFAULT_AXIS)
-    angle = 2.0 * np.arctan2(n[..., 0], q[..., 0])
-    return axis, _to_unit(angle, degrees)
+    n = norm(v)  # scaled: |v| of a 1e-162 rad turn must not underflow
+    angle = 2.0 * np.arctan2(n, q[..., 0])
+    return _direction(v, n), _to_unit(angle, degrees)
+
+
+def _direction(v: Array, length: Array) -> Array:
+    """``v / length`` (computed without underflow), or :data:`DEFAULT_AXIS` where it is 0."""
+    nonzero = (length > 0)[..., None]
+    return np.where(nonzero, unit(np.where(nonzero, v, DEFAULT_AXIS)), DEFAULT_AXIS)
 
 
 def matrix_from_axis_angle(axis: ArrayLike, angle: ArrayLike, degrees: bool = False) -> Array:
@@ -145,7 +149,7 @@ def _axis_and_angle(
 
 
 def _rodrigues(u: Array, theta: Array) -> Array:
-    K = _skew(u)
+    K = _kernels.skew(u)
     s = np.sin(theta)[..., None, None]
     c1 = (2.0 * np.sin(theta / 2) ** 2)[..., None, None]
     return np.eye(3) + s * K + c1 * (K @ K)
@@ -179,10 +183,10 @@ def axis_angle_from_matrix(R: ArrayLike, degrees: bool = False) -> tuple[Array, 
 def _split_rotvec(rotvec: ArrayLike, degrees: bool) -> tuple[Array, Array]:
     """Axis (``DEFAULT_AXIS`` for the zero vector) and angle in radians of rotation vectors."""
     r = _radians(as_array(rotvec, "rotvec", (3,)), degrees)
-    theta = np.linalg.norm(r, axis=-1)
-    axis = np.where(theta[..., None] > 0, r / np.where(theta > 0, theta, 1.0)[..., None],
-                    DEFAULT_AXIS)
-    return axis, theta
+    theta = norm(r)
+    if not np.all(np.isfinite(theta)):
+        raise ValueError("rotvec: has a length beyond the largest float; no angle to turn by")
+    return _direction(r, theta), theta
 
 
 def quat_from_rotvec(rotvec: ArrayLike, degrees: bool = False) -> Array:

@@ -40,12 +40,12 @@ dimensions.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._checks import as_array
-from .quaternion import _canonical, _mul, quat_from_matrix, quat_normalize
-
-Array = NDArray[np.float64]
+from .._typing import Array, BoolArray
+from .._validate import as_array
+from . import _kernels
+from .quaternion import quat_from_matrix, quat_normalize
 
 TAIT_BRYAN_ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
 PROPER_EULER_ORDERS = ("XYX", "XZX", "YXY", "YZY", "ZXZ", "ZYZ")
@@ -156,14 +156,15 @@ def quat_from_euler(angles: ArrayLike, order: str, degrees: bool = False) -> Arr
     """
     axes, intrinsic = _parse_order(order)
     a = _radians(as_array(angles, "angles", (3,)), degrees)
-    q = [_axis_quat(axis, a[..., n]) for n, axis in enumerate(axes)]
-    q = _mul(_mul(q[0], q[1]), q[2]) if intrinsic else _mul(_mul(q[2], q[1]), q[0])
-    return _canonical(q)
+    qs = [_axis_quat(axis, a[..., n]) for n, axis in enumerate(axes)]
+    mul = _kernels.quat_mul
+    q = mul(mul(qs[0], qs[1]), qs[2]) if intrinsic else mul(mul(qs[2], qs[1]), qs[0])
+    return _kernels.quat_canonical(q)
 
 
 def euler_from_quat(
     q: ArrayLike, order: str, degrees: bool = False, return_gimbal_lock: bool = False
-) -> Array | tuple[Array, Array]:
+) -> Array | tuple[Array, BoolArray]:
     r"""Euler angles of quaternions (``q`` and ``-q`` give the same angles).
 
     Bernardes & Viollet (2022): for the equivalent extrinsic sequence of axes
@@ -200,7 +201,7 @@ def euler_from_quat(
         If ``order`` is not one of the 24 orders, or ``q`` is zero or has a bad shape/values.
     """
     axes, intrinsic = _parse_order(order)
-    q = _canonical(quat_normalize(q))
+    q = _kernels.quat_canonical(quat_normalize(q))
     angles, locked = _euler_from_unit_quat(q, axes, intrinsic)
     if degrees:
         angles = np.degrees(angles)
@@ -209,7 +210,7 @@ def euler_from_quat(
 
 def _euler_from_unit_quat(
     q: Array, axes: tuple[int, int, int], intrinsic: bool
-) -> tuple[Array, Array]:
+) -> tuple[Array, BoolArray]:
     # Work with the extrinsic sequence: intrinsic "IJK" (a, b, c) is extrinsic "kji" (c, b, a).
     i, j, k = axes[::-1] if intrinsic else axes
     proper = i == k
@@ -243,12 +244,14 @@ def _euler_from_unit_quat(
 
 def _wrap(angle: Array) -> Array:
     """Angles mapped to [-pi, pi)."""
-    return (angle + np.pi) % (2 * np.pi) - np.pi
+    wrapped = (angle + np.pi) % (2 * np.pi) - np.pi
+    # Just below -pi, the modulo rounds up to 2 pi and the result to +pi: the same angle.
+    return np.where(wrapped >= np.pi, -np.pi, wrapped)
 
 
 def euler_from_matrix(
     R: ArrayLike, order: str, degrees: bool = False, return_gimbal_lock: bool = False
-) -> Array | tuple[Array, Array]:
+) -> Array | tuple[Array, BoolArray]:
     """Euler angles of rotation matrices (through the quaternion; see :func:`euler_from_quat`).
 
     Parameters
@@ -308,7 +311,7 @@ def gimbal_lock_distance(angles: ArrayLike, order: str, degrees: bool = False) -
 
 def is_gimbal_lock(
     angles: ArrayLike, order: str, degrees: bool = False, tol: float | None = None
-) -> Array:
+) -> BoolArray:
     """Whether Euler angles are within ``tol`` of gimbal lock (see :func:`gimbal_lock_distance`).
 
     Parameters
@@ -329,6 +332,6 @@ def is_gimbal_lock(
     """
     if tol is None:
         tol = np.degrees(GIMBAL_LOCK_TOL) if degrees else GIMBAL_LOCK_TOL
-    elif not np.isfinite(tol) or tol < 0:
+    elif np.any(as_array(tol, "tol") < 0):
         raise ValueError(f"tol: must be a finite number >= 0, got {tol!r}")
     return gimbal_lock_distance(angles, order, degrees) <= tol

@@ -19,12 +19,13 @@ dimensions of the quaternions (``q0, q1`` of shape (4,) and ``t`` of shape (N,) 
 
 from __future__ import annotations
 
+from typing import overload
+
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._checks import ZERO_QUAT, as_array, as_unit, broadcast_leading
-
-Array = NDArray[np.float64]
+from .._typing import Array
+from .._validate import ZERO_QUAT, as_array, as_unit, broadcast_leading
 
 
 def lerp(x0: ArrayLike, x1: ArrayLike, t: ArrayLike) -> Array:
@@ -61,6 +62,14 @@ def lerp(x0: ArrayLike, x1: ArrayLike, t: ArrayLike) -> Array:
     return (1 - t) * x0 + t * x1
 
 
+@overload
+def _shortest_pair(
+    where: str, q0: ArrayLike, q1: ArrayLike, t: ArrayLike
+) -> tuple[Array, Array, Array]: ...
+@overload
+def _shortest_pair(
+    where: str, q0: ArrayLike, q1: ArrayLike, t: None = None
+) -> tuple[Array, Array, None]: ...
 def _shortest_pair(
     where: str, q0: ArrayLike, q1: ArrayLike, t: ArrayLike | None = None
 ) -> tuple[Array, Array, Array | None]:
@@ -80,12 +89,16 @@ def _shortest_pair(
 
 def _half_sphere_angle(q0: Array, q1: Array) -> Array:
     # Omega = 2 atan2(|q0 - q1|, |q0 + q1|): accurate for all angles, unlike arccos(q0 . q1).
-    return 2.0 * np.arctan2(np.linalg.norm(q0 - q1, axis=-1), np.linalg.norm(q0 + q1, axis=-1))
+    omega: Array = 2.0 * np.arctan2(
+        np.linalg.norm(q0 - q1, axis=-1), np.linalg.norm(q0 + q1, axis=-1)
+    )
+    return omega
 
 
 def _sinc(x: Array) -> Array:
     """sin(x) / x, 1 at x = 0 (numpy's sinc is sin(pi x) / (pi x))."""
-    return np.sinc(x / np.pi)
+    y: Array = np.sinc(x / np.pi)
+    return y
 
 
 def nlerp(q0: ArrayLike, q1: ArrayLike, t: ArrayLike) -> Array:
@@ -118,7 +131,8 @@ def nlerp(q0: ArrayLike, q1: ArrayLike, t: ArrayLike) -> Array:
     q0, q1, t = _shortest_pair("nlerp", q0, q1, t)
     q = (1 - t) * q0 + t * q1
     # With q0 . q1 >= 0 the blend never passes through 0 (its norm is >= 1/sqrt(2) on [0, 1]).
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+    blend: Array = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return blend
 
 
 def slerp(q0: ArrayLike, q1: ArrayLike, t: ArrayLike) -> Array:
@@ -160,7 +174,8 @@ def slerp(q0: ArrayLike, q1: ArrayLike, t: ArrayLike) -> Array:
     q0, q1, t = _shortest_pair("slerp", q0, q1, t)
     omega = _half_sphere_angle(q0, q1)[..., None]  # in [0, pi/2] after the flip
     q = ((1 - t) * _sinc((1 - t) * omega) * q0 + t * _sinc(t * omega) * q1) / _sinc(omega)
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+    turn: Array = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return turn
 
 
 def quat_angle(q0: ArrayLike, q1: ArrayLike) -> Array:

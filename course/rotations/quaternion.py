@@ -18,23 +18,34 @@ zero vector included, use :func:`quat_rotate`.)
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._checks import (
+from .._typing import Array
+from .._validate import (
     ZERO_QUAT,
     as_array,
     as_quat,
     as_rotation_matrix,
     broadcast_leading,
     nonzero_norm,
+    unit,
 )
-
-Array = NDArray[np.float64]
+from . import _kernels
 
 
 def quat_identity(shape: int | tuple[int, ...] = ()) -> Array:
-    """Identity quaternions ``(1, 0, 0, 0)`` of shape ``shape + (4,)`` (an int n means (n,))."""
-    shape = (shape,) if isinstance(shape, (int, np.integer)) else tuple(shape)
+    """Identity quaternions ``(1, 0, 0, 0)`` of shape ``shape + (4,)`` (an int n means (n,)).
+
+    Raises
+    ------
+    ValueError
+        If ``shape`` is not a non-negative int or a tuple of them.
+    """
+    shape = (shape,) if isinstance(shape, (int, np.integer)) else shape
+    if not isinstance(shape, (tuple, list)) or not all(
+        isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 0 for n in shape
+    ):
+        raise ValueError(f"shape: expected a non-negative int or a tuple of them, got {shape!r}")
     q = np.zeros((*shape, 4))
     q[..., 0] = 1.0
     return q
@@ -67,22 +78,7 @@ def quat_mul(a: ArrayLike, b: ArrayLike) -> Array:
     a = as_quat(a, "a")
     b = as_quat(b, "b")
     broadcast_leading("quat_mul", ("a", a, 1), ("b", b, 1))
-    return _mul(a, b)
-
-
-def _mul(a: Array, b: Array) -> Array:
-    # Unchecked product for inner loops (forward kinematics, solvers).
-    aw, ax, ay, az = np.moveaxis(a, -1, 0)
-    bw, bx, by, bz = np.moveaxis(b, -1, 0)
-    return np.stack(
-        [
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ],
-        axis=-1,
-    )
+    return _kernels.quat_mul(a, b)
 
 
 def quat_conjugate(q: ArrayLike) -> Array:
@@ -93,7 +89,8 @@ def quat_conjugate(q: ArrayLike) -> Array:
     ValueError
         If ``q`` is the zero quaternion, or has a bad shape or non-finite values.
     """
-    return as_quat(q, "q") * np.array([1.0, -1.0, -1.0, -1.0])
+    conj: Array = as_quat(q, "q") * np.array([1.0, -1.0, -1.0, -1.0])
+    return conj
 
 
 def quat_inverse(q: ArrayLike) -> Array:
@@ -105,20 +102,24 @@ def quat_inverse(q: ArrayLike) -> Array:
         If ``q`` is the zero quaternion.
     """
     q = as_array(q, "q", (4,))
-    n2 = nonzero_norm(q, "q", ZERO_QUAT) ** 2
-    return q * np.array([1.0, -1.0, -1.0, -1.0]) / n2[..., None]
+    n = nonzero_norm(q, "q", ZERO_QUAT)
+    # (q / |q|)* / |q|: squaring |q| would overflow for |q| above ~1e154.
+    inverse: Array = unit(q) * np.array([1.0, -1.0, -1.0, -1.0]) / n[..., None]
+    return inverse
 
 
 def quat_normalize(q: ArrayLike) -> Array:
     r"""Scale ``q`` to unit length, :math:`q / \lVert q\rVert`.
+
+    Any non-zero finite ``q`` gives a unit quaternion: where squaring the components would
+    overflow (above ~1e154) or underflow, they are divided by the largest one first.
 
     Raises
     ------
     ValueError
         If ``q`` is the zero quaternion, which is no rotation.
     """
-    q = as_array(q, "q", (4,))
-    return q / nonzero_norm(q, "q", ZERO_QUAT)[..., None]
+    return unit(as_quat(q, "q"))
 
 
 def quat_canonical(q: ArrayLike) -> Array:
@@ -136,15 +137,7 @@ def quat_canonical(q: ArrayLike) -> Array:
         If ``q`` is the zero quaternion (which has no sign to choose), or has a bad shape or
         non-finite values.
     """
-    return _canonical(as_quat(q, "q"))
-
-
-def _canonical(q: Array) -> Array:
-    # First non-zero component decides the sign, so w == 0 (180 degree turns) is handled too.
-    nz = np.abs(q) > 1e-15
-    first = np.argmax(nz, axis=-1)
-    lead = np.take_along_axis(q, first[..., None], axis=-1)
-    return np.where(lead < 0, -q, q)
+    return _kernels.quat_canonical(as_quat(q, "q"))
 
 
 def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
@@ -173,14 +166,7 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     q = quat_normalize(q)
     v = as_array(v, "v", (3,))
     broadcast_leading("quat_rotate", ("q", q, 1), ("v", v, 1))
-    return _rotate(q, v)
-
-
-def _rotate(q: Array, v: Array) -> Array:
-    # Unchecked, for unit q in inner loops.
-    u = q[..., 1:]
-    t = 2.0 * np.cross(u, v)
-    return v + q[..., :1] * t + np.cross(u, t)
+    return _kernels.quat_rotate(q, v)
 
 
 def matrix_from_quat(q: ArrayLike) -> Array:
@@ -265,4 +251,4 @@ def quat_from_matrix(R: ArrayLike) -> Array:
     )
     k = np.argmax(d, axis=-1)
     q = np.take_along_axis(cands, k[..., None, None], axis=-2)[..., 0, :]
-    return _canonical(q / np.linalg.norm(q, axis=-1, keepdims=True))
+    return _kernels.quat_canonical(q / np.linalg.norm(q, axis=-1, keepdims=True))

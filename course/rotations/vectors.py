@@ -6,11 +6,11 @@ All functions broadcast over leading dimensions.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._checks import as_array, as_unit, broadcast_leading
-
-Array = NDArray[np.float64]
+from .._typing import Array
+from .._validate import as_array, as_unit, broadcast_leading
+from . import _kernels
 
 # Below this |u + v| (unit u, v) the two directions count as antiparallel: the shortest arc
 # is then any half turn about an axis perpendicular to u, and we pick one deterministically.
@@ -36,16 +36,7 @@ def skew(v: ArrayLike) -> Array:
     -------
     ndarray, shape (..., 3, 3)
     """
-    return _skew(as_array(v, "v", (3,)))
-
-
-def _skew(v: Array) -> Array:
-    # Unchecked, for callers that validated v already.
-    x, y, z = np.moveaxis(v, -1, 0)
-    o = np.zeros_like(x)
-    return np.stack(
-        [np.stack([o, -z, y], -1), np.stack([z, o, -x], -1), np.stack([-y, x, o], -1)], axis=-2
-    )
+    return _kernels.skew(as_array(v, "v", (3,)))
 
 
 def quat_between(u: ArrayLike, v: ArrayLike) -> Array:
@@ -101,4 +92,5 @@ def quat_between(u: ArrayLike, v: ArrayLike) -> Array:
     axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
     half_turn = np.concatenate([np.zeros_like(n), axis], axis=-1)
     q = np.where(opposite, half_turn, q)
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+    turn: Array = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return turn

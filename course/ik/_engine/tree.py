@@ -34,25 +34,27 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..fk import tree_path
-from ._small import (
+from course._typing import Array
+from course.fk import tree_path
+from course.rotations import matrix_from_quat, quat_from_matrix
+
+from .components import Limit, limit
+from .ops import ARRAYS
+from .small import (
     TINY,
     best_rotation,
     cross,
     dot,
+    matrix_from_rotvec,
     matvec,
     norm,
     orthonormalize,
-    rotvec_matrix,
-    rotvec_of,
-    twist_angle,
+    rotvec_from_matrix,
 )
-
-Array = NDArray[np.float64]
 
 
 @dataclass
-class ChainModel:
+class TreeModel:
     """Path joints re-rooted at the fixed joint; see the module docstring.
 
     Node arrays have one entry per path joint in traversal order (node 0 is the fixed joint);
@@ -115,6 +117,7 @@ class ChainModel:
         self.length_scale = max(float((to_any @ lengths).max(initial=0.0)), 1e-9)
         self.unit_weights = np.ones(self.n_cols)  # every column weighted 1 (shared, read-only)
         self.unit_weights.flags.writeable = False
+        self.no_limits = (None,) * len(self.var_nodes)  # every variable free
         hinge_cols = self.hinge[self.col_var]
         self.hinge_vars = np.flatnonzero(self.hinge)
         self.ball_vars = np.flatnonzero(~self.hinge)
@@ -228,7 +231,7 @@ class ChainModel:
             world = delta[:, self.ball_cols].reshape(len(delta), -1, 3)
             local = matvec(np.swapaxes(frames, -1, -2), world) * self.var_sign[self.ball_vars,
                                                                                 None]
-            out[:, nodes] = rotvec_matrix(local) @ Rn[:, nodes]
+            out[:, nodes] = matrix_from_rotvec(local) @ Rn[:, nodes]
         return out
 
 
@@ -239,8 +242,8 @@ def build_model(
     root: int,
     effectors: list[int],
     rot_effectors: list[int] = (),
-) -> ChainModel:
-    """Build the :class:`ChainModel` of the paths from ``root`` to ``effectors``.
+) -> TreeModel:
+    """Build the :class:`TreeModel` of the paths from ``root`` to ``effectors``.
 
     Parameters
     ----------
@@ -255,8 +258,28 @@ def build_model(
         Joints with a position target, and (a subset or others) with an orientation target.
     """
     parents = np.asarray(parents)
+    joints, node, parent, up, edge_joint, bone, depth = _reroot(parents, offsets, root,
+                                                                [*effectors, *rot_effectors])
+    descendant, ancestors = _descendants(parent)
+    eff = np.array([node[e] for e in effectors], dtype=int)
+    reff = np.array([node[e] for e in rot_effectors], dtype=int)
+    levels = [np.flatnonzero(np.array([depth[int(j)] for j in joints]) == k)
+              for k in range(max(depth.values()) + 1)]
+    return TreeModel(
+        joints=joints, parent=parent, up=up, edge_joint=edge_joint, bone=bone,
+        anchor_parent=not up.any(), effectors=eff, rot_effectors=reff,
+        **_variables(hinge_axes, parent, up, edge_joint, descendant, eff, reff),
+        levels=levels, ancestors=ancestors, descendant=descendant,
+        **_fit_tables(parent, up, bone, descendant),
+    )
+
+
+def _reroot(parents: NDArray[np.int_], offsets: Array, root: int, targets: list[int]) -> tuple:
+    """The path nodes re-rooted at ``root``, by depth: their joints, the node of each joint,
+    re-rooted parents, which edges go up the tree, the joint driving each node, its bone and
+    each joint's depth."""
     order: dict[int, int] = {root: -1}  # joint -> re-rooted parent joint
-    for e in list(effectors) + list(rot_effectors):
+    for e in targets:
         path = tree_path(parents, root, e)
         for a, b in zip(path[:-1], path[1:], strict=True):
             order.setdefault(b, a)
@@ -281,7 +304,13 @@ def build_model(
         else:
             edge_joint[i] = j
             bone[i] = offsets[j]
+    return joints, node, parent, up, edge_joint, bone, depth
 
+
+def _descendants(parent: NDArray[np.int_]) -> tuple[NDArray[np.bool_], Array]:
+    """``descendant[w, u]``: u at or below w; ``ancestors[u, w]``: 1 where w (not node 0) is
+    on the path to u."""
+    N = len(parent)
     descendant = np.zeros((N, N), dtype=bool)
     ancestors = np.zeros((N, N))
     for u in range(N):
@@ -291,10 +320,15 @@ def build_model(
             if w > 0:
                 ancestors[u, w] = 1.0
             w = parent[w]
+    return descendant, ancestors
 
-    eff = np.array([node[e] for e in effectors], dtype=int)
-    reff = np.array([node[e] for e in rot_effectors], dtype=int)
 
+def _variables(hinge_axes: list, parent: NDArray[np.int_], up: NDArray[np.bool_],
+               edge_joint: NDArray[np.int_], descendant: NDArray[np.bool_],
+               eff: NDArray[np.int_], reff: NDArray[np.int_]) -> dict[str, Any]:
+    """The variables (the edge rotations that move an effector) and their Jacobian columns,
+    as :class:`TreeModel` fields."""
+    N = len(parent)
     # A variable matters if it moves an effector: going down it turns the nodes strictly
     # below it about itself; going up it moves the node itself (about the node it came from).
     var_nodes, var_sign, var_frame, var_pivot, hinge = [], [], [], [], []
@@ -334,6 +368,17 @@ def build_model(
     rot_mask = np.array([[float(descendant[d, e]) for d in driven] for e in reff]).reshape(
         len(reff), len(driven))
 
+    return dict(var_nodes=var_nodes_a, var_sign=np.array(var_sign),
+                var_frame=np.array(var_frame, int), var_pivot=np.array(var_pivot, dtype=int),
+                hinge=np.array(hinge, dtype=bool), col_var=col_var_a,
+                col_axis=np.array(col_axis).reshape(-1, 3),
+                col_frame=np.array(col_frame, dtype=int), pos_mask=pos_mask, rot_mask=rot_mask)
+
+
+def _fit_tables(parent: NDArray[np.int_], up: NDArray[np.bool_], bone: Array,
+                descendant: NDArray[np.bool_]) -> dict[str, Any]:
+    """What :meth:`Problem.fit` needs per node, as :class:`TreeModel` fields."""
+    N = len(parent)
     # Down node u: its down children c sit at M_u l_c from u. Up node u: u itself at
     # -M_u l_u from the node it came from, and its down children c at M_u (l_c - l_u).
     fits = []
@@ -359,20 +404,8 @@ def build_model(
     for u, x in enumerate(moved):
         moved_nodes[u, :len(x)], moved_weight[u, :len(x)] = x, 1.0
 
-    levels = [np.flatnonzero(np.array([depth[int(j)] for j in joints]) == k)
-              for k in range(max(depth.values()) + 1)]
-    return ChainModel(
-        joints=joints, parent=parent, up=up, edge_joint=edge_joint, bone=bone,
-        anchor_parent=anchor_parent, effectors=eff, rot_effectors=reff,
-        var_nodes=var_nodes_a, var_sign=np.array(var_sign), var_frame=np.array(var_frame, int),
-        var_pivot=np.array(var_pivot, dtype=int), hinge=np.array(hinge, dtype=bool),
-        col_var=col_var_a, col_axis=np.array(col_axis).reshape(-1, 3),
-        col_frame=np.array(col_frame, dtype=int), pos_mask=pos_mask, rot_mask=rot_mask,
-        levels=levels, ancestors=ancestors, descendant=descendant,
-        fit_nodes=fit_nodes, fit_local=fit_local, fit_weight=fit_weight, pivot=pivot,
-        moved_nodes=moved_nodes, moved_weight=moved_weight,
-    )
-
+    return dict(fit_nodes=fit_nodes, fit_local=fit_local, fit_weight=fit_weight, pivot=pivot,
+                moved_nodes=moved_nodes, moved_weight=moved_weight)
 
 # The turn (radians) of every joint that first bends a straight path aimed along its own line.
 BEND = 0.05
@@ -395,13 +428,50 @@ def bend_increment(hinge: NDArray[np.bool_], u: Array) -> Array:
     return np.concatenate(cols, axis=1) if cols else np.zeros((len(u), 0))
 
 
+def bend_direction(p: Array, effectors: NDArray[np.int_], on_path: NDArray[np.bool_],
+                   targets: Array, far: Array, slack: float,
+                   tol: float) -> tuple[Array, NDArray[np.bool_]] | None:
+    """Which problems (B,) to bend, and along which line (B, 3, unit): those where some
+    effector's path is straight and its target lies on that line (within ``tol``), not yet
+    reached and not beyond the stretched path's tip (where the straight pose is already the
+    best one); None when no problem needs it. Both engines ask this once per solve.
+
+    Parameters
+    ----------
+    p : ndarray, shape (B, N, 3)
+        Node positions, ``p[:, 0]`` the fixed joint.
+    effectors : int ndarray, shape (E,)
+        The effector nodes.
+    on_path : bool ndarray, shape (E, N)
+        The nodes on each effector's path (the effector included).
+    targets : ndarray, shape (B, E, 3)
+    far : ndarray, shape (E,)
+        The length of each effector's path; ``slack`` the rounding allowed on a length.
+    """
+    root = p[:, :1]
+    tips = p[:, effectors]  # (B, E, 3)
+    axis = tips - root
+    length = norm(axis)
+    u = axis / np.maximum(length, TINY)[..., None]
+    off = norm(cross(p[:, None] - root[:, None], u[:, :, None]))  # (B, E, N)
+    straight = np.where(on_path, off, 0.0).max(axis=-1, initial=0.0) <= slack
+    rel = targets - root
+    stretched = (length >= far - slack) & (dot(rel, u) >= length)
+    need = (straight & (length > TINY) & (norm(cross(rel, u)) <= tol)
+            & (norm(targets - tips) >= tol) & ~stretched)  # (B, E)
+    if not need.any():
+        return None
+    first = np.argmax(need, axis=1)
+    return u[np.arange(len(u)), first], need.any(axis=1)
+
+
 def outside_shell(d: Any, far: Any, near: Any, slack: float) -> Any:
     """Whether distances ``d`` from the fixed joint lie outside the shell ``[near, far]`` an
     effector can reach, give or take ``slack`` (floats or arrays)."""
     return (d > far + slack) | (d < near - slack)
 
 
-def unreachable_targets(model: ChainModel, target_pos: Array, p0: Array) -> NDArray[np.bool_]:
+def unreachable_targets(model: TreeModel, target_pos: Array, p0: Array) -> NDArray[np.bool_]:
     """(B,) some position target (B, E, 3) lies outside the shell its effector can reach from
     the fixed joint at ``p0`` (B, 3)."""
     d = norm(target_pos - p0[:, None])
@@ -422,21 +492,27 @@ class Problem:
     target_rot : ndarray, shape (B, E_r, 3, 3)
     col_weight : ndarray, shape (C,)
         The regulariser's per-column weight ``W`` (1: normal, larger: the joint moves less).
-    hinge_limits : ndarray, shape (V, 2)
-        Hinge angle range ``[lo, hi]`` of each variable (``±inf`` when free or a ball).
-    ball_limit : ndarray, shape (V,)
-        Largest rotation angle of a ball joint's local rotation (``inf`` when free).
+    limits : tuple of Limit or None, length V
+        Each variable's limit (:class:`~course.ik._engine.components.Limit`; None: free).
+    pos_weight, rot_weight : ndarray, shapes (E,), (E_r,)
+        The targets' relative weights (largest 1).
     """
 
-    model: ChainModel
+    model: TreeModel
     Rn: Array
     base: Array
     p0: Array
     target_pos: Array
     target_rot: Array
     col_weight: Array
-    hinge_limits: Array
-    ball_limit: Array
+    limits: tuple[Limit | None, ...]
+    pos_weight: Array
+    rot_weight: Array
+
+    def __post_init__(self) -> None:
+        w = np.concatenate([self.pos_weight, self.rot_weight])
+        # Each target's three error rows scaled by the square root of its weight (None: all 1).
+        self.row_weight = None if np.all(w == 1.0) else np.repeat(np.sqrt(w), 3)
 
     @property
     def batch(self) -> int:
@@ -448,16 +524,19 @@ class Problem:
     def error(self, M: Array, p: Array) -> tuple[Array, Array]:
         r"""Error vector :math:`\Delta e` (B, 3E + 3E_r) and the largest effector error (B,).
 
-        Orientation errors are the world rotation vector of :math:`Q_t Q^{-1}` (radians).
+        Orientation errors are the world rotation vector of :math:`Q_t Q^{-1}` (radians); each
+        target's rows of :math:`\Delta e` are scaled by the square root of its weight (the
+        largest error is not).
         """
         m = self.model
         e = self.target_pos - p[:, m.effectors]
         size = norm(e)
         if len(m.rot_effectors):
-            r = rotvec_of(self.target_rot @ np.swapaxes(M[:, m.rot_effectors], -1, -2))
+            r = rotvec_from_matrix(self.target_rot @ np.swapaxes(M[:, m.rot_effectors], -1, -2))
             e = np.concatenate([e, r], 1)
             size = np.concatenate([size, norm(r)], 1)
-        return e.reshape(self.batch, -1), size.max(axis=1)
+        e = e.reshape(self.batch, -1)
+        return e if self.row_weight is None else e * self.row_weight, size.max(axis=1)
 
     def unreachable(self) -> NDArray[np.bool_]:
         """(B,) some position target lies outside the shell its effector can reach."""
@@ -465,28 +544,16 @@ class Problem:
 
     def bend_if_straight(self, Rn: Array, tol: float) -> Array:
         """Edge rotations bent by :func:`bend_increment` (then projected into the limits) in
-        the problems where some effector's path is straight and its target lies on that line
-        (within ``tol``), not yet reached and not beyond the stretched path's tip (where the
-        straight pose is already the best one); the others unchanged."""
+        the problems :func:`bend_direction` finds straight at a target on their line; the
+        others unchanged."""
         m = self.model
         M, p = self.forward(Rn)
-        root = p[:, :1]
-        tips = p[:, m.effectors]  # (B, E, 3)
-        axis = tips - root
-        length = norm(axis)
-        u = axis / np.maximum(length, TINY)[..., None]
-        on_path = self.model.descendant[:, m.effectors].T  # (E, N)
-        off = norm(cross(p[:, None] - root[:, None], u[:, :, None]))  # (B, E, N)
-        straight = np.where(on_path, off, 0.0).max(axis=-1, initial=0.0) <= m.reach_slack
-        rel = self.target_pos - root
-        stretched = (length >= m.reach_far - m.reach_slack) & (dot(rel, u) >= length)
-        need = (straight & (length > TINY) & (norm(cross(rel, u)) <= tol)
-                & (norm(self.target_pos - tips) >= tol) & ~stretched)  # (B, E)
-        if not need.any():
+        bend = bend_direction(p, m.effectors, m.descendant[:, m.effectors].T, self.target_pos,
+                              m.reach_far, m.reach_slack, tol)
+        if bend is None:
             return Rn
-        first = np.argmax(need, axis=1)
-        delta = bend_increment(m.hinge, u[np.arange(len(u)), first])
-        delta = np.where(need.any(axis=1)[:, None], delta, 0.0)
+        u, need = bend
+        delta = np.where(need[:, None], bend_increment(m.hinge, u), 0.0)
         return self.project(m.step(Rn, M, self.base, delta))
 
     def stretch_if_far(self, Rn: Array, tol: float) -> Array:
@@ -515,7 +582,7 @@ class Problem:
     def project(self, Rn: Array) -> Array:
         """Edge rotations with every variable projected into its limits."""
         m = self.model
-        if not (np.isfinite(self.hinge_limits).any() or np.isfinite(self.ball_limit).any()):
+        if not self.limited:
             return Rn
         Rn = Rn.copy()
         Rn[:, m.var_nodes] = self._limit(Rn[:, m.var_nodes], np.arange(len(m.var_nodes)))
@@ -595,7 +662,7 @@ class Problem:
                     flat = h_cur - dot(h_cur, a)[..., None] * a
                     num = (dot(a, cross(flat, h_want)) * h_wt).sum(-1)
                     den = (dot(flat, h_want) * h_wt).sum(-1)
-                    Rh = rotvec_matrix(axis * np.arctan2(num, den)[..., None])
+                    Rh = matrix_from_rotvec(axis * np.arctan2(num, den)[..., None])
                     R = np.where(hinge[:, None, None], Rh, R)
                 Fv = orthonormalize(np.swapaxes(Mpar[:, sel], -1, -2) @ (R @ Mv))
                 Rloc = np.where(up[nodes][:, None, None], np.swapaxes(Fv, -1, -2), Fv)
@@ -641,18 +708,21 @@ class Problem:
         axes[m.hinge] = m.col_axis[first[m.hinge]]
         return axes
 
+    @property
+    def limited(self) -> bool:
+        """Some variable has a limit."""
+        return any(lim is not None for lim in self.limits)
+
     def _limit(self, R: Array, v: NDArray[np.int_]) -> Array:
-        """Local rotations ``R`` (B, n, 3, 3) of variables ``v`` projected into their limits."""
-        lo, hi = self.hinge_limits[v, 0], self.hinge_limits[v, 1]
-        if np.isfinite(lo).any() or np.isfinite(hi).any():
-            axes = self._axes()[v]
-            theta = twist_angle(R, axes)
-            fix = np.clip(theta, lo, hi) - theta
-            R = rotvec_matrix(axes * fix[..., None]) @ R
-        cap = self.ball_limit[v]
-        if np.isfinite(cap).any():
-            r = rotvec_of(R)
-            ang = norm(r)
-            scale = np.minimum(1.0, cap / np.maximum(ang, TINY))
-            R = np.where((scale < 1.0)[..., None, None], rotvec_matrix(r * scale[..., None]), R)
+        """Local rotations ``R`` (B, n, 3, 3) of variables ``v`` projected into their limits,
+        by the fast path's projection (:func:`~course.ik._engine.components.limit`, on the
+        quaternions' components): a hinge's angle clipped, a ball's rotation angle capped, a
+        swing–twist cone clamped."""
+        todo = [(i, self.limits[int(u)]) for i, u in enumerate(v) if self.limits[int(u)]]
+        if not todo:
+            return R
+        R = R.copy()
+        for i, lim in todo:
+            q = tuple(np.moveaxis(quat_from_matrix(R[:, i]), -1, 0))  # components (B,)
+            R[:, i] = matrix_from_quat(np.stack(limit(q, lim, ARRAYS), -1))
         return R

@@ -1,4 +1,4 @@
-"""Input validation shared by the rotation functions.
+"""Input validation shared by the whole library (rotations, skeletons, FK, IK, motion).
 
 Every public function converts its inputs here, so a bad argument fails early with a
 message that names the argument and says what is wrong with it.
@@ -6,8 +6,12 @@ message that names the argument and says what is wrong with it.
 
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from ._typing import Array
 
 # How far R^T R may be from I before a matrix is rejected as "not a rotation". Loose enough
 # for matrices that went through float32 or a long chain of products, tight enough to catch
@@ -15,21 +19,30 @@ from numpy.typing import ArrayLike, NDArray
 ROTATION_MATRIX_TOL = 1e-5
 
 
-def as_array(x: ArrayLike, name: str, last: tuple[int, ...] = ()) -> NDArray[np.float64]:
+def as_array(x: ArrayLike, name: str, last: tuple[int, ...] = ()) -> Array:
     """Return ``x`` as a finite float64 array whose trailing shape is ``last``.
 
     Raises
     ------
     ValueError
-        If ``x`` is not numeric, the trailing shape is wrong, or any entry is NaN or
-        infinite; the message names ``name``.
+        If ``x`` is not real numbers (complex numbers, strings, even ``"1.5"``, dates and
+        other objects are refused rather than cast), the trailing shape is wrong, or any entry
+        is NaN or infinite; the message names ``name``.
     """
     if x is None:
         raise ValueError(f"{name}: expected numbers, got None")
     try:
-        a = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
+        a = np.asarray(x)
+    except (TypeError, ValueError) as exc:  # e.g. ragged nesting
         raise ValueError(f"{name}: expected numbers, got {type(x).__name__} ({exc})") from None
+    # Checked before the cast, which would drop imaginary parts with only a warning and read
+    # "1.5" or a date as a number.
+    if a.dtype.kind == "O":
+        a = _real_objects(a, name)
+    elif a.dtype.kind not in "biuf":
+        kind = _NOT_REAL.get(a.dtype.kind, f"dtype {a.dtype}")
+        raise ValueError(f"{name}: expected numbers, got {kind}")
+    a = a.astype(np.float64, copy=False)
     if a.ndim < len(last) or a.shape[a.ndim - len(last):] != last:
         want = "(..., " + ", ".join(map(str, last)) + ")"
         raise ValueError(f"{name}: expected shape {want}, got {a.shape}")
@@ -41,6 +54,30 @@ def as_array(x: ArrayLike, name: str, last: tuple[int, ...] = ()) -> NDArray[np.
     return a
 
 
+# The dtype kinds that are not real numbers, as a message says them.
+_NOT_REAL = {
+    "c": "complex values (only real numbers; pass x.real if the imaginary parts are 0)",
+    "U": "strings (numbers written as text are not numbers)",
+    "S": "bytes",
+    "M": "dates (datetime64)",
+    "m": "time spans (timedelta64)",
+    "V": "structured records",
+}
+
+
+def _real_objects(a: NDArray[np.object_], name: str) -> Array:
+    """An array of Python objects as float64 if every entry is a real number (big ints and
+    fractions are); otherwise a ``ValueError`` naming ``name`` and the first bad index."""
+    for i, v in enumerate(a.flat):
+        if not isinstance(v, (numbers.Real, np.bool_)):
+            at = f" at index {tuple(map(int, np.unravel_index(i, a.shape)))}" if a.ndim else ""
+            raise ValueError(f"{name}: expected numbers, got {type(v).__name__}{at}")
+    try:
+        return a.astype(np.float64)
+    except OverflowError:
+        raise ValueError(f"{name}: has a number too large for a float") from None
+
+
 def _index(mask: NDArray[np.bool_]) -> str:
     """`` at index (i, j)`` of the first True entry of ``mask``, or ``""`` for a scalar."""
     if np.ndim(mask) == 0:
@@ -48,7 +85,7 @@ def _index(mask: NDArray[np.bool_]) -> str:
     return f" at index {tuple(int(i) for i in np.argwhere(mask)[0])}"
 
 
-def broadcast_leading(where: str, *args: tuple[str, NDArray[np.float64], int]) -> tuple[int, ...]:
+def broadcast_leading(where: str, *args: tuple[str, Array, int]) -> tuple[int, ...]:
     """The broadcast of the arguments' leading shapes, each without its trailing axes.
 
     Parameters
@@ -80,12 +117,48 @@ def broadcast_leading(where: str, *args: tuple[str, NDArray[np.float64], int]) -
         ) from None
 
 
+# Between these, |x|^2 neither overflows nor underflows, so np.linalg.norm (which squares the
+# components) is exact and used as it is; outside, the components are scaled first.
+_PLAIN_NORM = (1e-140, 1e140)
+
+
+def norm(x: Array) -> Array:
+    """Euclidean norm of the last axis of ``x``, exact for any finite ``x``: where
+    ``np.linalg.norm`` would overflow (above ~1e154) or underflow (below ~1e-154, which gave a
+    3e-162 rad rotation an axis of length 0.71), the components are divided by the largest
+    first."""
+    return _norms(x)[0]
+
+
+def unit(x: Array) -> Array:
+    """Non-zero rows of ``x`` (last axis) scaled to unit length, however large or small."""
+    n, plain = _norms(x)
+    if np.all(plain):
+        return x / n[..., None]
+    s = x / np.max(np.abs(x), axis=-1, keepdims=True)
+    scaled = s / np.linalg.norm(s, axis=-1, keepdims=True)
+    return np.where(plain[..., None], x / np.where(plain, n, 1.0)[..., None], scaled)
+
+
+def _norms(x: Array) -> tuple[Array, NDArray[np.bool_]]:
+    """:func:`norm` and where ``np.linalg.norm`` alone was exact."""
+    with np.errstate(over="ignore", under="ignore"):  # those entries are recomputed
+        n = np.linalg.norm(x, axis=-1)
+    plain = (n > _PLAIN_NORM[0]) & (n < _PLAIN_NORM[1])
+    if np.all(plain):
+        return n, plain
+    m = np.max(np.abs(x), axis=-1)
+    with np.errstate(over="ignore"):  # only for a length beyond the largest float: inf
+        scaled = m * np.linalg.norm(x / np.where(m > 0, m, 1.0)[..., None], axis=-1)
+    return np.where(plain, n, scaled), plain
+
+
 def nonzero_norm(
-    x: NDArray[np.float64], name: str, why: str = "a direction needs a non-zero vector",
+    x: Array, name: str, why: str = "a direction needs a non-zero vector",
     eps: float = 1e-12,
-) -> NDArray[np.float64]:
+) -> Array:
     """Norm of the last axis of ``x``; a ``ValueError`` naming ``name`` and ``why`` if any is ~0."""
-    n = np.linalg.norm(x, axis=-1)
+    n = norm(x)
     small = n < eps
     if np.any(small):
         raise ValueError(f"{name}: has zero length{_index(small)}; {why}")
@@ -95,7 +168,7 @@ def nonzero_norm(
 ZERO_QUAT = "the zero quaternion is no rotation"
 
 
-def as_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
+def as_quat(q: ArrayLike, name: str) -> Array:
     """``q`` checked by :func:`as_array` (shape (..., 4)) and refused if any is the zero
     quaternion (norm below 1e-12), which no rotation has."""
     a = as_array(q, name, (4,))
@@ -105,17 +178,19 @@ def as_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
 
 def as_unit(
     x: ArrayLike, name: str, size: int = 3, why: str = "a direction needs a non-zero vector"
-) -> NDArray[np.float64]:
+) -> Array:
     """``x`` checked by :func:`as_array` (trailing size ``size``) and scaled to unit length."""
     a = as_array(x, name, (size,))
-    return a / nonzero_norm(a, name, why)[..., None]
+    nonzero_norm(a, name, why)
+    return unit(a)
 
 
-def _dot(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.einsum("...i,...i->...", a, b)
+def _dot(a: Array, b: Array) -> Array:
+    d: Array = np.einsum("...i,...i->...", a, b)
+    return d
 
 
-def as_rotation_matrix(R: ArrayLike, name: str = "R") -> NDArray[np.float64]:
+def as_rotation_matrix(R: ArrayLike, name: str = "R") -> Array:
     r"""``R`` checked to be a stack of rotation matrices, shape ``(..., 3, 3)``.
 
     A rotation matrix is orthonormal, :math:`R^T R = I`, with :math:`\det R = +1`.

@@ -9,9 +9,8 @@ or a target exactly on a joint must not poison a solve.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
-Array = NDArray[np.float64]
+from course._typing import Array
 
 # Below this length a direction is treated as undefined (zero bone, target on the pivot).
 TINY = 1e-12
@@ -39,7 +38,7 @@ def matvec(M: Array, v: Array) -> Array:
     return (M @ v[..., None])[..., 0]
 
 
-def rotvec_matrix(r: Array) -> Array:
+def matrix_from_rotvec(r: Array) -> Array:
     r"""Rodrigues: :math:`R = I + \frac{\sin\theta}{\theta}[r]_\times +
     \frac{1-\cos\theta}{\theta^2}[r]_\times^2` for rotation vectors ``r`` (..., 3), exact at 0."""
     theta2 = dot(r, r)
@@ -61,7 +60,7 @@ def rotvec_matrix(r: Array) -> Array:
     )
 
 
-def arc_matrix(u: Array, v: Array) -> Array:
+def matrix_between(u: Array, v: Array) -> Array:
     r"""Shortest-arc rotation matrices turning direction ``u`` onto ``v`` (any lengths).
 
     Axis :math:`u\times v`, angle :math:`\mathrm{atan2}(\lVert u\times v\rVert, u\cdot v)`.
@@ -85,7 +84,7 @@ def arc_matrix(u: Array, v: Array) -> Array:
         angle = np.where(opposite, np.pi, angle)
     degenerate = (nu < TINY) | (norm(v) < TINY)
     angle = np.where(degenerate, 0.0, angle)
-    return rotvec_matrix(axis * angle[..., None])
+    return matrix_from_rotvec(axis * angle[..., None])
 
 
 def best_rotation(u: Array, v: Array, w: Array | None = None) -> Array:
@@ -110,10 +109,10 @@ def best_rotation(u: Array, v: Array, w: Array | None = None) -> Array:
     Returns
     -------
     ndarray, shape (..., 3, 3)
-        For one pair (``k = 1``) this is the shortest arc :func:`arc_matrix`.
+        For one pair (``k = 1``) this is the shortest arc :func:`matrix_between`.
     """
     if u.shape[-2] == 1:
-        return arc_matrix(u[..., 0, :], v[..., 0, :])
+        return matrix_between(u[..., 0, :], v[..., 0, :])
     wu = u if w is None else u * w[..., None]
     H = np.swapaxes(wu, -1, -2) @ v  # sum_i u_i v_i^T
     U, S, Vt = np.linalg.svd(H)
@@ -124,22 +123,13 @@ def best_rotation(u: Array, v: Array, w: Array | None = None) -> Array:
     R = np.swapaxes(Vt, -1, -2) @ (D[..., None] * np.swapaxes(U, -1, -2))
     rank1 = S[..., 1] <= 1e-9 * S[..., 0]
     if np.any(rank1):
-        R = np.where(rank1[..., None, None], arc_matrix(U[..., :, 0], Vt[..., 0, :]), R)
+        R = np.where(rank1[..., None, None], matrix_between(U[..., :, 0], Vt[..., 0, :]), R)
     return R
 
 
-def twist_angle(R: Array, axis: Array) -> Array:
-    r"""Angle of rotation matrices ``R`` about unit ``axis``:
-    :math:`\mathrm{atan2}(a\cdot s,\ \mathrm{tr}R - 1)` with
-    :math:`s = (R_{21}-R_{12}, R_{02}-R_{20}, R_{10}-R_{01})`, which for a turn by θ about
-    ``axis`` is :math:`(2\sin\theta, 2\cos\theta)`: exact on all of :math:`(-\pi, \pi]`
-    (a hinge's rotations are such turns)."""
-    s = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
-                  R[..., 1, 0] - R[..., 0, 1]], -1)
-    return np.arctan2(dot(s, axis), R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2] - 1.0)
 
 
-def rotvec_of(R: Array) -> Array:
+def rotvec_from_matrix(R: Array) -> Array:
     r"""Rotation vectors :math:`\theta\,\hat a`, :math:`\theta \in [0, \pi]`, of rotation
     matrices ``R`` (..., 3, 3).
 

@@ -1,0 +1,228 @@
+r"""The fast path's kinematics: one serial chain from the fixed joint to one position target.
+
+This is the common case (a notebook's arm, a benchmark chain, a leg from the hips): the path
+is ``node 0 -> node 1 -> ... -> node n-1`` (the effector), every node's local rotation
+:math:`R_i` is a hinge, a ball or fixed, and there is one position target. The lecture's
+forward kinematics on it,
+
+.. math::
+    Q_i = Q_{i-1} R_i,\qquad p_i = p_{i-1} + Q_{i-1}\, l_i \qquad (Q_{-1} = \text{base}),
+
+is written here on quaternions and 3-vectors held as tuples of *components*: a vector is
+``(x, y, z)``, a quaternion ``(w, x, y, z)``, and each component is either a Python float (one
+problem: plain float arithmetic costs ~50 ns where a numpy call on a tiny array costs ~1 µs)
+or an ndarray of shape ``(B,)`` (a batch: every line is then one vectorised, contiguous
+operation over all ``B`` problems). The same code runs both ways; ``ops``
+(:data:`~course.ik._engine.ops.FLOATS` or :data:`~course.ik._engine.ops.ARRAYS`) supplies the
+handful of functions that differ (``sqrt``, ``where``, ...). The kernels are named as the
+checked functions of :mod:`course.rotations` they mirror (``quat_mul``, ``quat_between``, ...).
+
+The Jacobian columns are :math:`a_i\times(e - r_i)` (hinge, world axis
+:math:`a_i = Q_{i-1}\hat a_i`) or the three world axes :math:`x, y, z` crossed with
+:math:`e - r_i` (ball), and a hinge step is :math:`R_i \leftarrow \exp(\delta\,\hat a_i) R_i`,
+a ball step :math:`R_i \leftarrow \exp(Q_{i-1}^{-1}\delta) R_i`, as on the general
+:class:`~course.ik._engine.tree.Problem`. The solvers are in
+:mod:`course.ik._engine.chain_solvers`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from .components import (
+    Limit,
+    Quat,
+    Scalar,
+    Vec,
+    add,
+    cross,
+    dot,
+    limit,
+    quat_between,
+    quat_conjugate,
+    quat_from_axis_angle,
+    quat_from_rotvec,
+    quat_mul,
+    quat_rotate,
+    scale,
+    sub,
+)
+from .ops import FLOATS, Ops
+from .small import TINY
+from .tree import bend_direction, bend_increment, outside_shell
+
+
+# --------------------------------------------------------------------------- the chain
+@dataclass(frozen=True)
+class SerialChain:
+    """A chain ``node 0 -> ... -> node n-1`` (the effector); see the module docstring."""
+
+    joints: tuple[int, ...]  # skeleton joint of every node
+    bones: tuple[Vec, ...]  # l_i: node i in node i-1's frame (zero for node 0)
+    variables: tuple[int, ...]  # nodes whose local rotation the solve changes
+    axes: tuple[Vec | None, ...]  # per variable: hinge axis (in the parent frame) or None
+    reach: tuple[float, float, float]  # the effector's reach: far, near and rounding slack
+
+    @cached_property  # fixed per chain, asked by every solve
+    def free_balls(self) -> bool:
+        """Every bone turns freely: nodes 0..n-2 are all ball joints (FABRIK's own case)."""
+        return (self.variables == tuple(range(len(self.joints) - 1))
+                and all(a is None for a in self.axes))
+
+    def forward(self, R: list[Quat], base: Quat, p0: Vec) -> tuple[list[Quat], list[Vec]]:
+        r"""Global orientations and positions, :math:`Q_i = Q_{i-1}R_i`,
+        :math:`p_i = p_{i-1} + Q_{i-1} l_i`."""
+        Q, P = [], []
+        q, p = base, p0
+        for i, (r, bone) in enumerate(zip(R, self.bones, strict=True)):
+            if i:
+                p = add(p, quat_rotate(q, bone))
+            q = quat_mul(q, r)
+            Q.append(q)
+            P.append(p)
+        return Q, P
+
+    def columns(self, Q: list[Quat], P: list[Vec], base: Quat) -> list[Vec]:
+        r"""Jacobian columns :math:`a\times(e - r_i)`: the world hinge axis
+        :math:`a = Q_{i-1}\hat a`, or the world x, y and z axes for a ball joint."""
+        e, cols = P[-1], []
+        for v, axis in zip(self.variables, self.axes, strict=True):
+            rx, ry, rz = sub(e, P[v])
+            if axis is None:
+                cols += [(0.0, -rz, ry), (rz, 0.0, -rx), (-ry, rx, 0.0)]
+            else:
+                cols.append(cross(quat_rotate(Q[v - 1] if v else base, axis), (rx, ry, rz)))
+        return cols
+
+    def step(self, R: list[Quat], Q: list[Quat], base: Quat, delta: list[Scalar],
+             ops: Ops) -> list[Quat]:
+        r"""Turn the variables by ``delta`` (one entry per column): a hinge
+        :math:`R \leftarrow \exp(\delta\hat a) R`, a ball by the world rotation vector
+        :math:`\delta` applied to :math:`Q_i`, i.e. :math:`R \leftarrow
+        \exp(Q_{i-1}^{-1}\delta) R`."""
+        R, c = list(R), 0
+        for v, axis in zip(self.variables, self.axes, strict=True):
+            if axis is None:
+                local = quat_rotate(quat_conjugate(Q[v - 1] if v else base), tuple(delta[c:c + 3]))
+                turn, c = quat_from_rotvec(local, ops), c + 3
+            else:
+                turn, c = quat_from_axis_angle(axis, delta[c], ops), c + 1
+            R[v] = quat_mul(turn, R[v])
+        return R
+
+    def limits(self, limits: tuple[Limit | None, ...]) -> list[tuple[int, Limit]]:
+        """``(node, limit)`` of every variable with a limit (``limits``: one entry per
+        variable, None when free), for :meth:`project`."""
+        return [(v, lim) for v, lim in zip(self.variables, limits, strict=True) if lim]
+
+    def bend_if_straight(self, R: list[Quat], Q: list[Quat], P: list[Vec], base: Quat, p0: Vec,
+                         target: Vec, tol: float, limits: list[tuple], ops: Ops
+                         ) -> tuple[list[Quat], list[Quat], list[Vec]]:
+        """As :meth:`course.ik._engine.tree.Problem.bend_if_straight` (the same test,
+        :func:`~course.ik._engine.tree.bend_direction`): ``R`` (with its ``Q`` and ``P``) bent
+        off a straight chain whose target lies on its line, unreached and not beyond the
+        stretched tip; unchanged (and cheap to check) otherwise."""
+        root, tip = P[0], P[-1]
+        axis = sub(tip, root)
+        length = ops.sqrt(dot(axis, axis))
+        u = scale(axis, 1.0 / ops.where(length > TINY, length, 1.0))
+        rel = sub(target, root)
+        off = cross(rel, u)
+        need = ops.both(length > TINY, ops.sqrt(dot(off, off)) <= tol)
+        if not ops.any(need):  # the usual case: the target is off the chain's line
+            return R, Q, P
+        # Maybe (the pre-test above is cheap in floats): the engines' shared test, on arrays.
+        B, n = np.size(length), len(P)
+        far, _, slack = self.reach
+        bend = bend_direction(ops.stack(P, B).reshape(B, n, 3), np.array([n - 1]),
+                              np.ones((1, n), bool), ops.stack([target], B).reshape(B, 1, 3),
+                              np.array([far]), slack, tol)
+        if bend is None:
+            return R, Q, P
+        u, need = bend
+        hinge = np.array([a is not None for a in self.axes])
+        delta = np.where(need[:, None], bend_increment(hinge, u), 0.0)
+        R = self.step(R, Q, base, delta[0].tolist() if ops is FLOATS else list(delta.T), ops)
+        if limits:
+            R = self.project(R, limits, ops)
+        return (R, *self.forward(R, base, p0))
+
+    def stretch_if_far(self, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
+                       ops: Ops) -> list[Quat]:
+        """As :meth:`course.ik._engine.tree.Problem.stretch_if_far`, for a chain of free balls:
+        ``R`` stretched straight at a target at or beyond the reach (:func:`fit_chain`);
+        unchanged where the target is nearer or already reached."""
+        far = self.reach[0]
+        to_t = sub(target, p0)
+        d = ops.sqrt(dot(to_t, to_t))
+        need = ops.both(d >= far - tol, d > 0.0)
+        if not ops.any(need):  # the usual case: the target well inside the reach
+            return R
+        Q, P = self.forward(R, base, p0)
+        need = ops.both(need, ops.dist(P[-1], target) >= tol)
+        u = scale(to_t, 1.0 / ops.where(need, d, 1.0))
+        straight, reach = [p0], 0.0
+        for bone in self.bones[1:]:
+            reach += math.sqrt(dot(bone, bone))
+            straight.append(add(p0, scale(u, reach)))
+        return ops.select(need, fit_chain(self, R, Q, P, base, straight, ops)[0], R)
+
+    def unreachable(self, target: Vec, p0: Vec, ops: Ops) -> Any:
+        """Whether the target lies outside the shell the effector can reach from ``p0``."""
+        e = sub(target, p0)
+        return outside_shell(ops.sqrt(dot(e, e)), *self.reach)
+
+    @staticmethod
+    def project(R: list[Quat], limits: list[tuple], ops: Ops) -> list[Quat]:
+        """Variables projected into their :meth:`limits` (:func:`limit`)."""
+        R = list(R)
+        for v, lim in limits:
+            R[v] = limit(R[v], lim, ops)
+        return R
+
+
+def serial_chain(model: Any) -> SerialChain | None:
+    """The :class:`SerialChain` of a :class:`~course.ik._engine.tree.TreeModel`, or None if its
+    paths are not one chain from the fixed joint (parent frame held) to a position target."""
+    n = model.n_nodes
+    if (not model.anchor_parent or len(model.rot_effectors) or len(model.effectors) != 1
+            or model.effectors[0] != n - 1 or np.any(model.parent[1:] != np.arange(n - 1))):
+        return None
+    axes = np.zeros((len(model.var_nodes), 3))
+    first = np.searchsorted(model.col_var, np.arange(len(model.var_nodes)))
+    axes[model.hinge] = model.col_axis[first[model.hinge]]
+    return SerialChain(
+        joints=tuple(int(j) for j in model.joints),
+        bones=tuple(tuple(float(c) for c in b) for b in model.bone),
+        variables=tuple(int(v) for v in model.var_nodes),
+        axes=tuple(tuple(float(c) for c in a) if h else None
+                   for a, h in zip(axes, model.hinge, strict=True)),
+        reach=(float(model.reach_far[0]), float(model.reach_near[0]), model.reach_slack),
+    )
+
+
+def fit_chain(chain: SerialChain, R: list[Quat], Q: list[Quat], P_old: list[Vec], base: Quat,
+              P_new: list[Vec], ops: Ops) -> tuple[list[Quat], list[Vec]]:
+    r"""Local rotations that put a ball-joint chain on the points ``P_new`` (same bones): each
+    node's global orientation turned by the shortest arc from its old bone direction to the
+    new one, :math:`Q_i' = \mathrm{arc}(p_{i+1} - p_i,\ p'_{i+1} - p'_i)\,Q_i` (so every bone
+    keeps its twist), then :math:`R_i' = Q_{i-1}'^{-1} Q_i'`; ``Q`` and ``P_old`` are the
+    :math:`Q_i` and :math:`p_i` of ``R``. Also returns the positions of the new pose by
+    forward kinematics on the way, :math:`p'_{i+1} = p'_i + Q_i' l_{i+1}` from the root
+    (equal to ``P_new`` up to rounding: the residual they give is the returned pose's own)."""
+    R, parent, p = list(R), base, P_new[0]
+    P = [p]
+    for i in range(len(R) - 1):
+        bone = chain.bones[i + 1]
+        turn = quat_between(sub(P_old[i + 1], P_old[i]), sub(P_new[i + 1], P_new[i]), ops)
+        q = quat_mul(turn, Q[i])
+        R[i] = quat_mul(quat_conjugate(parent), q)
+        parent = q
+        p = add(p, quat_rotate(q, bone))
+        P.append(p)
+    return R, P

@@ -1,0 +1,79 @@
+"""A validated solve: what :func:`course.ik.solve` checked, in the form the engines read."""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+from course._typing import Array
+
+from .chain import SerialChain
+from .components import Limit
+from .history import History
+from .tree import TreeModel
+
+
+@dataclass
+class Request:
+    """One solve (``batched`` False: arrays without a batch axis) or a batch of ``B``.
+
+    ``pos_t`` and ``rot_t`` map effector joints to their position ``([B,] 3)`` and orientation
+    ``([B,] 4)`` targets; ``limits`` holds each variable's :class:`~.components.Limit` (None:
+    free) and ``limited`` whether any limits were given at all;
+    ``options`` are the method's options with every default filled in; ``pos_weight`` (E,)
+    and ``rot_weight`` (E_r,) the targets' relative weights (largest 1).
+    """
+
+    skeleton: Any
+    method: str
+    local: Array  # ([B,] J, 4) unit quaternions
+    root_pos: Array  # ([B,] 3)
+    root: int  # the fixed joint
+    pos_t: dict[int, Array]
+    rot_t: dict[int, Array]
+    batched: bool
+    B: int
+    model: TreeModel
+    serial: SerialChain | None  # the model as one serial chain, if it is one
+    col_weight: Array  # (C,)
+    pos_weight: Array  # (E,)
+    rot_weight: Array  # (E_r,)
+    limits: tuple[Limit | None, ...]  # (V,)
+    limited: bool
+    tol: float
+    max_iter: int
+    record: bool
+    options: dict[str, Any]
+
+    def rows(self) -> Iterator[Request]:
+        """The batch's problems, one by one (each without a batch axis)."""
+        for i in range(self.B):
+            row = copy.copy(self)  # (dataclasses.replace re-runs every field: 5x slower)
+            row.local = _row(self.local, i, 3)
+            row.root_pos = _row(self.root_pos, i, 2)
+            row.pos_t = {j: _row(t, i, 2) for j, t in self.pos_t.items()}
+            row.rot_t, row.batched, row.B = {}, False, 1
+            yield row
+
+
+def _row(a: Array, i: int, batched_ndim: int) -> Array:
+    """Problem ``i`` of ``a``: its row if ``a`` has a batch axis (of ``B``, or of 1 broadcast
+    over the batch), else ``a`` itself."""
+    if a.ndim < batched_ndim:
+        return a
+    return a[i if len(a) > 1 else 0]
+
+
+class Solved(NamedTuple):
+    """What an engine hands back: the pose (local rotations, root position, positions, with
+    a batch's leading ``B``), its :class:`History`, whether each target is out of reach, and
+    the recorded ``(local rotations, positions)`` of every iteration (``record``) or None."""
+
+    local: Array
+    root_pos: Array
+    positions: Array
+    history: History
+    unreachable: Any
+    frames: list[tuple[Array, Array]] | None
