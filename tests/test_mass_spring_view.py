@@ -1,0 +1,81 @@
+"""course.viz.cloth: the cloth mesh is updated in place, and the controls drive the simulation."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+pytest.importorskip("pyvista")
+
+from course.physics import grid_cloth, simulate  # noqa: E402
+from course.viz import ClothScene, cloth_simulator  # noqa: E402
+
+
+def _cloth_pixels(img: np.ndarray) -> np.ndarray:
+    """(row, column) of the pixels shaded in the cloth's blue (lit or in shadow): blue
+    clearly above red, unlike the grey-blue sky."""
+    rgb = img[..., :3].astype(float)
+    return np.argwhere((rgb[..., 2] - rgb[..., 0] > 60) & (rgb[..., 1] < 170))
+
+
+def test_scene_updates_the_same_mesh_in_place_and_the_picture_follows():
+    cloth = grid_cloth(12, 12)
+    scene = ClothScene(cloth, window_size=(320, 240))
+    mesh, points = scene.mesh, scene.mesh.GetPoints()
+    before = _cloth_pixels(scene.image())
+    fallen = simulate(cloth.system, cloth.positions, np.zeros_like(cloth.positions), 1 / 60,
+                      30).positions[-1]
+    scene.set_positions(fallen)
+    after = _cloth_pixels(scene.image())
+    assert scene.mesh is mesh and scene.mesh.GetPoints() is points  # nothing re-created
+    assert np.allclose(scene.positions, fallen)
+    assert len(before) > 200 and len(after) > 200
+    assert after[:, 0].mean() > before[:, 0].mean() + 10  # the cloth fell: lower in the image
+    scene.close()
+
+
+def test_scene_rejects_bad_positions():
+    scene = ClothScene(grid_cloth(3, 3), window_size=(160, 120))
+    with pytest.raises(ValueError, match=r"positions must have shape \(9, 3\)"):
+        scene.set_positions(np.zeros((8, 3)))
+    with pytest.raises(ValueError, match="positions contains NaN"):
+        scene.set_positions(np.full((9, 3), np.nan))
+    scene.close()
+
+
+def test_simulator_controls_drive_the_simulation():
+    sim = cloth_simulator(grid_cloth(8, 8), window_size=(240, 180))
+    sim.step_button.click()
+    assert sim.steps == 1 and sim.last.converged
+    assert sim.time == pytest.approx(sim.sliders["h"].value)
+    assert np.allclose(sim.scene.positions, sim.x)
+    assert "Newton" in sim.readout.value
+    sim.sliders["stiffness"].value = 100.0
+    assert np.allclose(sim.cloth.system.k.max(), 100.0)
+    sim.play.value += 1  # a tick of play
+    assert sim.steps == 2
+    sim.reset_button.click()
+    assert sim.steps == 0 and np.allclose(sim.scene.positions, sim.cloth.positions)
+    sim.close()
+
+
+def test_simulator_stops_when_explicit_euler_explodes():
+    sim = cloth_simulator(grid_cloth(8, 8), window_size=(240, 180))
+    sim.sliders["method"].value = "explicit"
+    sim.advance(60)
+    assert sim.exploded and sim.steps < 60
+    assert "exploded" in sim.readout.value
+    assert np.all(np.isfinite(sim.scene.positions))  # the last drawable state stays shown
+    steps = sim.steps
+    sim.advance()
+    assert sim.steps == steps  # nothing more until a reset
+    sim.reset()
+    assert not sim.exploded
+    with pytest.raises(ValueError, match="^method: "):
+        cloth_simulator(grid_cloth(3, 3), method="rk4")
+    sim.close()
