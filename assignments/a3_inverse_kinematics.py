@@ -152,7 +152,9 @@ def dls_step(J: np.ndarray, error: np.ndarray, damping: float) -> np.ndarray:
     ``damping`` is :math:`\lambda` itself: square it. Solve the linear system
     (``np.linalg.solve``) rather than inverting. With :math:`\lambda > 0` the step stays
     bounded even at a singular pose (a stretched arm), where :math:`JJ^T` cannot be
-    inverted; with :math:`\lambda = 0` it is the pseudo-inverse step :math:`J^+e`.
+    inverted; with :math:`\lambda = 0` it is the pseudo-inverse step :math:`J^+e` only
+    when :math:`J` has full row rank (otherwise :math:`JJ^T` is singular and the formula
+    has no answer).
 
     Parameters
     ----------

@@ -19,7 +19,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .runner import Result
+from .results import Result
 from .sandbox import DEFAULT_LIMITS, Limits
 
 __all__ = ["Limits", "Result", "check"]

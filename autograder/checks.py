@@ -10,6 +10,7 @@ no student object ever reaches it.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -168,7 +169,8 @@ class QuatCheck(Check):
 
     def compare(self, got: Array, expected: Array) -> str | None:
         g, e = np.reshape(got, (-1, 4)), np.reshape(expected, (-1, 4))
-        where = (lambda i: "") if np.ndim(got) == 1 else (lambda i: f"{self.row} {i} ")
+        where: Callable[[int], str] = (
+            (lambda i: "") if np.ndim(got) == 1 else (lambda i: f"{self.row} {i} "))
         norms = np.linalg.norm(g, axis=-1)
         bad = np.flatnonzero(np.abs(norms - 1.0) > self.atol)
         if bad.size:
@@ -282,12 +284,15 @@ class StringsCheck(Check):
                                    f"{self.expected_text(expected)}")
         return Validated(tuple(i.text for i in value.items))
 
-    def compare(self, got, expected) -> str | None:  # type: ignore[override]
+    # A StringsCheck is only handed the names its own validate() returned, never arrays.
+    def compare(  # type: ignore[override]
+        self, got: Sequence[str], expected: Sequence[str]
+    ) -> str | None:
         if len(got) != len(expected):
             missing = [n for n in expected if n not in got][:3]
             extra = [n for n in got if n not in expected][:3]
-            detail = ", ".join(filter(None, (missing and f"missing {missing}",
-                                             extra and f"unexpected {extra}")))
+            detail = ", ".join(filter(None, (f"missing {missing}" if missing else "",
+                                             f"unexpected {extra}" if extra else "")))
             return f"has {len(got)} {self.noun}s, expected {len(expected)}" + (
                 f" ({detail})" if detail else "")
         for i, (g, e) in enumerate(zip(got, expected, strict=True)):
@@ -295,13 +300,15 @@ class StringsCheck(Check):
                 return f"{self.noun} {i} is {g!r}, expected {e!r}"
         return None
 
-    def close(self, a, b) -> bool:  # type: ignore[override]
+    def close(self, a: Sequence[str], b: Sequence[str]) -> bool:  # type: ignore[override]
         return tuple(a) == tuple(b)
 
-    def show_value(self, x, digits: int = 3) -> str:  # type: ignore[override]
+    def show_value(self, x: Sequence[str], digits: int = 3) -> str:  # type: ignore[override]
         return _show_names(x)
 
-    def show_expected(self, expected, digits: int = 3) -> str:  # type: ignore[override]
+    def show_expected(  # type: ignore[override]
+        self, expected: Sequence[str], digits: int = 3
+    ) -> str:
         return _show_names(expected)
 
 
@@ -310,8 +317,8 @@ def _kinds(items: tuple[Value, ...]) -> str:
     return " and ".join(kinds) or "nothing"
 
 
-def _show_names(names) -> str:
-    names = list(names)
+def _show_names(seq: Sequence[str]) -> str:
+    names = list(seq)
     shown = ", ".join(repr(n) for n in names[:6])
     return f"[{shown}{', ...' if len(names) > 6 else ''}] ({len(names)})"
 
@@ -352,23 +359,30 @@ class TupleCheck(Check):
                 errors.append(v.error)
         return Validated(tuple(arrays), errors[0] if errors else None)
 
-    def compare(self, got, expected) -> str | None:  # type: ignore[override]
+    # A TupleCheck is only handed the tuples its own validate() returned, one item per check.
+    def compare(  # type: ignore[override]
+        self, got: tuple[Any, ...], expected: tuple[Any, ...]
+    ) -> str | None:
         for check, name, g, e in zip(self.items, self.names, got, expected, strict=True):
             why = check.compare(g, e)
             if why:
                 return f"{name} {why}"
         return None
 
-    def close(self, a, b) -> bool:  # type: ignore[override]
+    def close(self, a: tuple[Any, ...], b: tuple[Any, ...]) -> bool:  # type: ignore[override]
         return all(c.close(x, y) for c, x, y in zip(self.items, a, b, strict=True))
 
-    def difference(self, got, expected) -> float:  # type: ignore[override]
+    def difference(self, got: tuple[Any, ...], expected: tuple[Any, ...]) -> float:
         return max(c.difference(g, e) for c, g, e in zip(self.items, got, expected, strict=True))
 
-    def show_value(self, x, digits: int = 3) -> str:  # type: ignore[override]
+    def show_value(  # type: ignore[override]
+        self, x: tuple[Any, ...], digits: int = 3
+    ) -> str:
         return "(" + ", ".join(c.show_value(v, digits) for c, v in zip(self.items, x,
                                                                        strict=True)) + ")"
 
-    def show_expected(self, expected, digits: int = 3) -> str:  # type: ignore[override]
+    def show_expected(  # type: ignore[override]
+        self, expected: tuple[Any, ...], digits: int = 3
+    ) -> str:
         return "(" + ", ".join(c.show_expected(e, digits) for c, e in zip(self.items, expected,
                                                                           strict=True)) + ")"

@@ -42,6 +42,7 @@ import sys
 import traceback
 import types
 from collections.abc import Callable
+from typing import Any
 
 # The standard-library modules a submission may import (numpy comes from the assignment):
 # computation, text and data, and what those import themselves. Everything else is refused
@@ -96,7 +97,8 @@ def main() -> None:
     os.chdir(config["cwd"])  # under the sandbox's chroot the process starts in "/"
     if config["limits"] is not None:
         _limit(config["limits"])
-    sys.modules["ctypes"] = None  # type: ignore[assignment]  (numpy copes without it)
+    # None blocks the import (numpy copes without ctypes); typeshed allows only modules.
+    sys.modules["ctypes"] = None  # type: ignore[assignment]
     sys.path.append(config["numpy_path"])
     import numpy  # noqa: F401  (loaded before the hook; the submission reuses it)
     import numpy.linalg  # noqa: F401
@@ -109,7 +111,8 @@ def main() -> None:
     if os.name == "nt":
         import nt
 
-        nt_paths = (nt._getfullpathname, nt._getfinalpathname)
+        # Private Windows functions that typeshed does not list.
+        nt_paths = (nt._getfullpathname, nt._getfinalpathname)  # type: ignore[attr-defined]
         dlls = os.path.join(sys.base_exec_prefix, "DLLs")
         extensions = [os.path.realpath(dlls)] if os.path.isdir(dlls) else []
     sys.addaudithook(make_hook(
@@ -148,7 +151,7 @@ def _take_pipes() -> tuple[int, int]:
     return req, res
 
 
-def _limit(limits: dict) -> None:
+def _limit(limits: dict[str, float]) -> None:
     import resource  # only asked for on POSIX systems
 
     cpu, mem = int(limits["cpu_seconds"]), int(limits["memory_mb"]) << 20
@@ -182,10 +185,12 @@ def _allowed_modules(extra: list[str]) -> frozenset[str]:
     return ALLOWED_STDLIB | frozenset(extra)
 
 
-def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
-              allowed: frozenset[str], nt_paths: tuple[Callable, Callable] | None = None,
+# One factory on purpose: the hook and its helpers bind all they use as defaults, here.
+def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],  # noqa: C901
+              allowed: frozenset[str],
+              nt_paths: tuple[Callable[[str], str], Callable[[str], str]] | None = None,
               caseless: bool = sys.platform in CASELESS_PLATFORMS
-              ) -> Callable[[str, tuple], None]:
+              ) -> Callable[[str, tuple[Any, ...]], None]:
     """The audit hook. ``writable``: the working directory; ``readable``: the directories a
     submission may read (numpy's and other extra folders first, then the standard library,
     whose ``hidden`` site-packages stay out of reach).
@@ -215,7 +220,7 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
                 path = getcwd() + "/" + path
             todo = path.split("/")
             todo.reverse()
-            done = []
+            done: list[str] = []
             hops = 0
             while todo:
                 part = todo.pop()
@@ -243,8 +248,9 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
                     continue
                 done.append(part)
             return "/" + "/".join(done)
-    else:
-        def locate(path, full=nt_paths[0], final=nt_paths[1], startswith=str.startswith,
+    else:  # the Windows variant binds other helpers, so its parameters differ
+        def locate(  # type: ignore[misc]
+                   path, full=nt_paths[0], final=nt_paths[1], startswith=str.startswith,
                    rpartition=str.rpartition, oserror=OSError, valueerror=ValueError,
                    refuse=PermissionError):
             """``path`` as Windows opens it: made absolute, ``/`` as ``\\``, ``.``, ``..`` and
@@ -305,7 +311,8 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
             return True
         return within(p, stdlib) and not within(p, hidden)
 
-    def hook(event, args, resolve=resolve, within=within, may_read=may_read,
+    # One branch per audit-event family; a dispatch table would be a lookup the hook avoids.
+    def hook(event, args, resolve=resolve, within=within, may_read=may_read,  # noqa: C901
              writable=(writable,), allowed=allowed, blocked=BLOCKED_EVENTS,
              path_events=PATH_EVENTS, list_events=LIST_EVENTS, code_attributes=CODE_ATTRIBUTES,
              write_flags=os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_TRUNC,
@@ -357,7 +364,8 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
     return hook
 
 
-def _call(protocol, fn, args: list, i: int, config: dict) -> dict:
+def _call(protocol: types.ModuleType, fn: Callable[..., object], args: list[Any], i: int,
+          config: dict[str, Any]) -> dict[str, Any]:
     try:
         value = protocol.encode_value(fn(*protocol.decode_args(args)))
     except BaseException as exc:  # noqa: B036  (SystemExit, KeyboardInterrupt: the student's)
@@ -365,7 +373,7 @@ def _call(protocol, fn, args: list, i: int, config: dict) -> dict:
     return {"case": i, "ok": True, "value": value}
 
 
-def _describe(exc: BaseException, config: dict) -> dict:
+def _describe(exc: BaseException, config: dict[str, Any]) -> dict[str, Any]:
     """The exception's type, message and the last line of the submission it went through."""
     try:
         message = str(exc)[:300]

@@ -1,4 +1,5 @@
-"""Command line: ``python -m autograder check a1`` and ``python -m autograder grade ...``."""
+"""Command line: ``python -m autograder check a1``, ``python -m autograder grade ...`` and
+``python -m autograder gradescope a1 --out a1_autograder.zip``."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from pathlib import Path
 
 from .assignments import KEYS, load
 from .grading import collect, grade
+from .lms import FILES as LMS_FILES
 from .runner import default_submission, run, seed_from_env
 from .sandbox import LEVELS, level_for, weaker_warning
 from .submission import printable
@@ -28,6 +30,13 @@ def main(argv: list[str] | None = None) -> int:
     c.add_argument("--isolation", choices=LEVELS, help="the sandbox's isolation (default: the "
                    "strongest this machine allows)")
 
+    z = sub.add_parser("gradescope", help="build the zip Gradescope's autograder takes "
+                       "(instructors)")
+    z.add_argument("assignment", choices=KEYS)
+    z.add_argument("--out", required=True, type=Path, help="the zip to write")
+    z.add_argument("--seed-file", type=Path, help="a file holding the secret seed (default: "
+                   "a new one, printed once)")
+
     g = sub.add_parser("grade", help="grade many submissions (instructors)")
     g.add_argument("--assignment", required=True, choices=KEYS)
     g.add_argument("submissions", nargs="+", type=Path, help=".py/.ipynb files or folders")
@@ -36,8 +45,26 @@ def main(argv: list[str] | None = None) -> int:
     g.add_argument("--seed", help="secret seed of the hidden tests (or $AUTOGRADER_SEED)")
     g.add_argument("--isolation", choices=LEVELS, help="the sandbox's isolation (default: the "
                    "strongest this machine allows)")
+    g.add_argument("--scheduler", metavar="ADDRESS", help="grade on a Dask cluster: a "
+                   "scheduler's address, or local[:N] for N worker processes here (needs the "
+                   "'cluster' extra)")
+    g.add_argument("--min-isolation", choices=LEVELS, help="with --scheduler: refuse workers "
+                   "weaker than this (default: the strongest the scheduler's machine gives)")
+    g.add_argument("--resume", action="store_true", help="skip submissions already graded "
+                   "in --out and unchanged since")
+    g.add_argument("--lms", action="append", default=[], choices=LMS_FILES, help="also write "
+                   "the totals as this LMS imports them (grades-<lms>.csv; may be repeated)")
 
     args = parser.parse_args(argv)
+    if args.command == "gradescope":
+        from .gradescope.bundle import build, built_message  # only this command needs them
+
+        try:
+            made = build(args.assignment, args.out, args.seed_file)
+        except ValueError as exc:
+            parser.error(str(exc))
+        print(built_message(args.out, made), file=sys.stderr)
+        return 0
     spec = load(args.assignment)
     seed = seed_from_env(args.seed)
     try:
@@ -58,6 +85,11 @@ def main(argv: list[str] | None = None) -> int:
         result = run(spec, path, seed, level=level)
         print(result)
         return 0 if result.score >= result.max_score else 1
+    if args.scheduler and args.isolation:
+        parser.error("--isolation: with --scheduler each worker grades at its strongest; "
+                     "give --min-isolation instead")
+    if args.min_isolation and not args.scheduler:
+        parser.error("--min-isolation: only with --scheduler (here, give --isolation)")
     try:
         submissions = collect(args.submissions, spec.template)
     except ValueError as exc:
@@ -76,8 +108,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--out: cannot make the folder {printable(args.out)} ({exc.strerror})")
     start = time.monotonic()
     try:
-        rows = grade(spec, submissions, args.out, jobs=args.jobs, seed=seed, level=level)
-    except OSError as exc:  # grades.csv cannot be written
+        rows = grade(spec, submissions, args.out, jobs=args.jobs, seed=seed, level=level,
+                     scheduler=args.scheduler, min_isolation=args.min_isolation,
+                     resume=args.resume, lms=args.lms)
+    except (OSError, ValueError) as exc:  # grades.csv cannot be written, a worker too weak...
         print(f"error: {exc}", file=sys.stderr)
         return 1
     mean = sum(r["score"] for r in rows) / len(rows)

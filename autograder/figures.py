@@ -12,11 +12,15 @@ from __future__ import annotations
 
 import base64
 import io
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .runner import CaseResult, Result, TestResult
-from .spec import Picture
+if TYPE_CHECKING:  # hints only: results.py -> report.py -> (lazily) here
+    from matplotlib.figure import Figure
+
+    from .results import CaseResult, Result, TestResult
+    from .spec import Picture
 
 AXIS_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
 YOURS, EXPECTED, START = "#e8710a", "#1f6fd1", "#b8c0c8"
@@ -58,13 +62,13 @@ def _finite(p: Picture) -> bool:
     return all(a is not None and np.all(np.isfinite(a)) for a in arrays)
 
 
-def _figure(size: tuple[float, float]):
+def _figure(size: tuple[float, float]) -> Figure:
     from matplotlib.figure import Figure  # the Agg canvas: no display needed
 
     return Figure(figsize=size, dpi=80)
 
 
-def _png(fig) -> str:
+def _png(fig: Figure) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", bbox_inches="tight")
     return base64.b64encode(buf.getvalue()).decode()
@@ -84,7 +88,9 @@ def _triads_png(got: np.ndarray, want: np.ndarray) -> str:
     return _png(fig)
 
 
-def _bones(parents: np.ndarray, positions: np.ndarray):
+def _bones(
+    parents: np.ndarray, positions: np.ndarray
+) -> list[tuple[np.ndarray, np.ndarray]]:
     """(start, end) of every bone, as pairs of points."""
     return [(positions[p], positions[j]) for j, p in enumerate(parents) if 0 <= p < j]
 
@@ -110,9 +116,10 @@ def _trees_png(p: Picture) -> str:
         ax2.plot(positions[:, 0], positions[:, 1], ".", color=colour, ms=4)
     for (label, pts), colour in zip(p.points, MARKERS, strict=False):
         pts = np.atleast_2d(pts)
-        style = {"marker": "x" if len(pts) == 1 else ".", "s": 60 if len(pts) == 1 else 10}
-        ax3.scatter(pts[:, 0], pts[:, 2], pts[:, 1], color=colour, label=label, **style)
-        ax2.scatter(pts[:, 0], pts[:, 1], color=colour, label=label, **style)
+        marker, size = ("x", 60) if len(pts) == 1 else (".", 10)
+        ax3.scatter(pts[:, 0], pts[:, 2], pts[:, 1], color=colour, label=label, marker=marker,
+                    s=size)
+        ax2.scatter(pts[:, 0], pts[:, 1], color=colour, label=label, marker=marker, s=size)
     everything = np.vstack([t[0] for t in trees] + [np.atleast_2d(a) for _, a in p.points])
     lo, hi = everything.min(axis=0), everything.max(axis=0)
     centre, half = (lo + hi) / 2, max(float(np.max(hi - lo)) / 2, 1e-3) * 1.1

@@ -1,8 +1,13 @@
-"""Grade a whole class: many submissions in parallel, one result file each, one CSV.
+"""Grade a whole class: many submissions in parallel, one result file each, one CSV, the
+class summary (:mod:`autograder.summary`) and the LMS exports (:mod:`autograder.lms`).
 
 Each submission runs in its own sandboxed child, so threads are enough here: the
-grading process only sends inputs, compares arrays and writes files. A submission that
-breaks anything only loses its own points; the batch always finishes.
+grading process only sends inputs, compares arrays and writes files (its judging shares one
+interpreter lock, though: ``benchmarks/grading.py`` finds a ``--scheduler local:N`` cluster
+of N processes faster than N threads on a3). A submission that breaks anything only loses its
+own points; the batch always finishes. Each graded submission is kept as plain data
+(:func:`record`), which a cluster's worker sends back (:mod:`autograder.cluster`) and
+``--resume`` reads again.
 
 File names, links and folders come from students too. Folders are searched without
 following links, to a bounded depth and number of entries; a link, pipe or device where a
@@ -13,6 +18,7 @@ safe (:func:`safe_name`) and unique, and every file written is proven inside ``o
 
 from __future__ import annotations
 
+import hashlib
 import itertools
 import json
 import os
@@ -20,23 +26,31 @@ import re
 import stat
 import sys
 import time
+from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
+from functools import cache
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
-from .report import create, csv_header, csv_row, gradescope, write_csv
-from .runner import Result, TestResult, prepare, run
+from .lms import FILES as LMS_FILES
+from .lms import export
+from .records import Job, grader_failed, not_run, record
+from .report import create, write_csv
+from .results import Result
+from .runner import prepare, run
 from .sandbox import DEFAULT_LIMITS, Limits, level_for
 from .spec import Assignment
-from .submission import printable
+from .submission import SubmissionError, printable, read_regular
 
 SUFFIXES = (".py", ".ipynb")
 MAX_DEPTH = 32  # folder levels searched inside a student's folder
 MAX_ENTRIES = 2000  # files and folders looked at inside a student's folder, in all
 MAX_LISTED = 100_000  # entries of a folder of submissions
 MAX_NAME_BYTES = 200  # of a name, as UTF-8; with "-N" it stays a valid file name everywhere
-RESERVED = frozenset({"grades.csv"})  # written beside the submissions' folders
+RESERVED = frozenset({"grades.csv", "summary.html", *LMS_FILES.values()})  # beside the folders
+STATE = "grading.json"  # beside results.json: what --resume needs of a graded submission
+MAX_STATE = 1 << 20  # bytes of a grading.json
 JUNK = frozenset({"__MACOSX", "__pycache__"})  # an archiver's or Python's, not the student's
 WINDOWS_DEVICES = frozenset({"CON", "PRN", "AUX", "NUL", *(f"COM{i}" for i in range(1, 10)),
                              *(f"LPT{i}" for i in range(1, 10))})
@@ -46,11 +60,13 @@ WINDOWS_DEVICES = frozenset({"CON", "PRN", "AUX", "NUL", *(f"COM{i}" for i in ra
 class Submission:
     """A submission: its name (its folder in the output), its file, and why it cannot be
     graded if that was found while collecting (several candidate files, a search cut
-    short); then ``path`` is the student's folder."""
+    short); then ``path`` is the student's folder. ``folder``: the student's folder it was
+    found in, if any (:mod:`autograder.lms` reads the platform's metadata there)."""
 
     name: str
     path: Path
     refused: str = ""
+    folder: Path | None = None
 
 
 def collect(paths: list[Path], template: str) -> list[Submission]:
@@ -95,7 +111,7 @@ def _in_folder(folder: Path, template: str) -> list[Submission]:
         if _is_dir(e):
             inner = _one_submission(path, template)
             if inner:
-                found.append(inner)
+                found.append(replace(inner, folder=path))
         elif path.suffix in SUFFIXES:  # a link, pipe or socket too: refused when read
             found.append(Submission(path.stem, path))
         elif e.is_symlink() and os.path.isdir(path):  # a student's folder as a link
@@ -103,7 +119,7 @@ def _in_folder(folder: Path, template: str) -> list[Submission]:
     return found
 
 
-def _is_dir(entry: os.DirEntry) -> bool:
+def _is_dir(entry: os.DirEntry[str]) -> bool:
     try:
         return entry.is_dir(follow_symlinks=False)
     except OSError:
@@ -215,73 +231,176 @@ def inside(root: Path, name: str) -> Path:
     return path
 
 
-def grade(assignment: Assignment, submissions: list[Submission | tuple[str, Path]], out: Path,
+def grade(assignment: Assignment, submissions: Sequence[Submission | tuple[str, Path]],
+          out: Path,
           *, jobs: int = 1, seed: str | None = None, limits: Limits = DEFAULT_LIMITS,
-          progress: TextIO | None = sys.stderr, level: str | None = None) -> list[dict]:
-    """Grade every submission; write ``out/<name>/results.json`` and ``out/grades.csv``.
-    ``level``: the sandbox's isolation (default: the strongest here). Names are made safe
-    and unique again (:func:`unique`: unchanged for :func:`collect`'s); a submission that
-    cannot be read gets score 0 and the reason, like any refused one. Nothing is written
-    through a link in ``out``: a ``results.json`` is then skipped with a warning, and
-    ``grades.csv`` is an ``OSError``."""
+          progress: TextIO | None = sys.stderr, level: str | None = None,
+          scheduler: str | None = None, min_isolation: str | None = None,
+          resume: bool = False, lms: Sequence[str] = ()) -> list[dict[str, Any]]:
+    """Grade every submission; write ``out/<name>/results.json``, ``out/grades.csv``, the
+    class summary ``out/summary.html`` and an ``out/grades-<lms>.csv`` per name in ``lms``
+    (:mod:`autograder.lms`). Returns the rows of ``grades.csv``.
+
+    ``level``: the sandbox's isolation here (default: the strongest here). ``scheduler``: a
+    Dask scheduler's address, or ``local[:N]``, to grade on a cluster instead
+    (:mod:`autograder.cluster`, whose workers must reach ``min_isolation``); without it no
+    Dask is imported. ``resume``: a submission whose files, assignment, seed, limits and
+    grader are those recorded in ``out/<name>/grading.json`` is not graded again.
+
+    Names are made safe and unique again (:func:`unique`: unchanged for :func:`collect`'s);
+    a submission that cannot be read gets score 0 and the reason, like any refused one.
+    Nothing is written through a link in ``out``: a ``results.json`` is then skipped with a
+    warning, and ``grades.csv`` is an ``OSError``. An LMS export whose students cannot be
+    told apart is a ``ValueError`` (after ``grades.csv`` and the summary are written).
+    """
     subs = unique([s if isinstance(s, Submission) else Submission(*s) for s in submissions])
     out.mkdir(parents=True, exist_ok=True)
     root = out.resolve()
     prepare(assignment, seed)  # once, before the threads start
-    level = level_for(level)  # probed once, too
-    bar = Progress(len(subs), progress)
-    rows: dict[str, dict] = {}
-    header = None
-    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-        futures = {pool.submit(_grade_one, assignment, s, seed, limits, level): s
-                   for s in subs}
-        for future in as_completed(futures):
-            s = futures[future]
-            result = future.result()
-            _write_results(root, s.name, gradescope(result))
-            rows[s.name] = csv_row(s.name, result)
-            header = header or csv_header(result)
-            bar.step(s.name, result)
+    context = _context(assignment, seed, limits)
+    records: dict[str, dict[str, Any]] = {}
+    todo: list[tuple[Submission, Job | None]] = []
+    for s in subs:
+        job = None if s.refused else _job(s, assignment.template, context)
+        stored = _stored(root, s.name, job.digest) if resume and job else None
+        if stored:
+            records[s.name] = stored
+        else:
+            todo.append((s, job))
+    bar = Progress(len(todo), progress)
+    graded: Iterator[tuple[str, dict[str, Any]]]
+    if scheduler:
+        from .cluster import grade_on_cluster
+
+        local = [s for s, job in todo if job is None]  # refused or unreadable: nothing to send
+        remote = [job for _, job in todo if job is not None]
+        graded = itertools.chain(
+            _on_pool(assignment, [(s, None) for s in local], 1, seed, limits, level_for(level)),
+            grade_on_cluster(assignment, remote, scheduler, seed=seed, limits=limits,
+                             min_isolation=min_isolation))
+    else:
+        graded = _on_pool(assignment, todo, jobs, seed, limits, level_for(level))
+    for name, rec in graded:
+        _write_results(root, name, rec)
+        records[name] = rec
+        bar.step(name)
     bar.close()
-    ordered = [rows[s.name] for s in subs]
-    if header:
-        try:
-            write_csv(inside(root, "grades.csv"), header, ordered)
-        except ValueError as exc:  # a link planted in --out
-            raise OSError(f"grades.csv not written: {exc}") from None
-    return ordered
+    ordered = [records[s.name] for s in subs]
+    if ordered:
+        write_csv(_output(root, "grades.csv"), ordered[0]["header"], [r["row"] for r in ordered])
+        _write_summary(_output(root, "summary.html"), assignment, [r["facts"] for r in ordered])
+        for kind in lms:
+            export(kind, _output(root, LMS_FILES[kind]), assignment,
+                   [(s, r["row"]) for s, r in zip(subs, ordered, strict=True)])
+    return [r["row"] for r in ordered]
 
 
-def _write_results(root: Path, name: str, results: dict) -> None:
-    """``root/name/results.json``, if both are really there (not links out of ``root``)."""
+def _output(root: Path, name: str) -> Path:
+    """``root / name`` for a file of the whole class; an ``OSError`` if a link was planted
+    there."""
+    try:
+        return inside(root, name)
+    except ValueError as exc:
+        raise OSError(f"{name} not written: {exc}") from None
+
+
+def _write_summary(path: Path, assignment: Assignment, facts: list[dict[str, Any]]) -> None:
+    from .summary import summary_html
+
+    with create(path) as f:
+        f.write(summary_html(assignment, facts))
+
+
+def _job(s: Submission, template: str, context: str) -> Job | None:
+    """``s`` read into a :class:`Job`, or None if one of its files cannot be read (the
+    local grader then says why, as it would without a cluster)."""
+    paths = [s.path]
+    beside = s.path.parent / template
+    if s.path.suffix == ".ipynb" and os.path.lexists(beside):
+        paths.append(beside)
+    try:  # as the grader reads them: a link, a pipe, too large, not UTF-8 is refused
+        files = {p.name: read_regular(p).encode() for p in paths}
+    except SubmissionError:
+        return None
+    digest = hashlib.sha256(context.encode())
+    for name, data in files.items():
+        digest.update(f"\0{len(name)}:{name}:{len(data)}:".encode(errors="surrogateescape"))
+        digest.update(data)
+    return Job(s.name, str(s.path), s.path.name, files, digest.hexdigest())
+
+
+def _context(assignment: Assignment, seed: str | None, limits: Limits) -> str:
+    """What else decides a grade: the assignment, the seed, the limits and the grader's own
+    code (a fix to a test regrades everyone)."""
+    return json.dumps([assignment.key, seed or "", asdict(limits), _grader_digest()])
+
+
+@cache
+def _grader_digest() -> str:
+    here = Path(__file__).parent
+    digest = hashlib.sha256()
+    for path in sorted(here.rglob("*.py")):
+        digest.update(str(path.relative_to(here)).encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
+
+
+def _on_pool(assignment: Assignment, todo: list[tuple[Submission, Job | None]], jobs: int,
+             seed: str | None, limits: Limits, level: str
+             ) -> Iterator[tuple[str, dict[str, Any]]]:
+    """``(name, record)`` of each submission as it is graded here, by ``jobs`` threads."""
+    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+        futures = {pool.submit(_grade_one, assignment, s, seed, limits, level): (s, job)
+                   for s, job in todo}
+        for future in as_completed(futures):
+            s, job = futures[future]
+            yield s.name, record(s.name, future.result(), job.digest if job else "")
+
+
+def _write_results(root: Path, name: str, rec: dict[str, Any]) -> None:
+    """``root/name/results.json`` and, for a resumable record, ``grading.json`` after it (so
+    that a batch stopped in between grades the submission again), if they are really there
+    (not links out of ``root``)."""
     try:
         folder = inside(root, name)
         folder.mkdir(exist_ok=True)
         with create(inside(folder, "results.json")) as f:
-            f.write(json.dumps(results, indent=1))
+            f.write(json.dumps(rec["results"], indent=1))
+        state = inside(folder, STATE)
+        if rec["digest"]:
+            with create(state) as f:
+                f.write(json.dumps({k: rec[k] for k in ("digest", "row", "header", "facts")}))
+        elif os.path.lexists(state):
+            os.unlink(state)
     except (OSError, ValueError) as exc:  # a link planted in --out, say: write nothing there
         print(f"warning: results of {name} not written: {exc}", file=sys.stderr)
+
+
+def _stored(root: Path, name: str, digest: str) -> dict[str, Any] | None:
+    """The record kept in ``root/name/grading.json`` if it is of ``digest`` and its
+    ``results.json`` is there; None otherwise (anything amiss: grade again)."""
+    try:
+        folder = inside(root, name)
+        if not stat.S_ISREG(os.lstat(inside(folder, "results.json")).st_mode):
+            return None
+        kept = json.loads(read_regular(inside(folder, STATE), MAX_STATE))
+    except (OSError, ValueError):  # SubmissionError and JSONDecodeError are ValueErrors
+        return None
+    if not (isinstance(kept, dict) and kept.get("digest") == digest
+            and isinstance(kept.get("row"), dict) and isinstance(kept.get("header"), list)
+            and isinstance(kept.get("facts"), dict)):
+        return None
+    return kept
 
 
 def _grade_one(assignment: Assignment, s: Submission, seed: str | None, limits: Limits,
                level: str) -> Result:
     if s.refused:
-        return _not_run(assignment, s.path, seed, level, s.refused,
-                        "not run: the submission was refused (see above)")
+        return not_run(assignment, s.path, seed, level, s.refused,
+                       "not run: the submission was refused (see above)")
     try:
         return run(assignment, s.path, seed, limits, level)
     except Exception as exc:  # a bug of ours must not stop the class's grading
-        return _not_run(assignment, s.path, seed, level,
-                        f"the grader failed ({type(exc).__name__}: {exc}); please report this",
-                        "not run: the grader failed on this submission")
-
-
-def _not_run(assignment: Assignment, path: Path, seed: str | None, level: str, problem: str,
-             note: str) -> Result:
-    tests = [TestResult(p.test, assignment.function(p.test.function), note=note)
-             for p in prepare(assignment, seed)]
-    return Result(assignment, path, tests, seed is not None, isolation=level,
-                  problems=[problem])
+        return grader_failed(assignment, s.path, seed, level, exc)
 
 
 class Progress:
@@ -293,7 +412,7 @@ class Progress:
         self.start = time.monotonic()
         self.tty = bool(stream and stream.isatty())
 
-    def step(self, name: str, result: Result) -> None:
+    def step(self, name: str) -> None:
         self.done += 1
         if not self.stream:
             return

@@ -17,11 +17,17 @@ import os
 import stat
 import textwrap
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
-from .runner import Result, TestResult, describe_args
+import numpy as np
+
+from .checks import show
 from .sandbox import ISOLATION_NOTES
 from .submission import printable
+
+if TYPE_CHECKING:  # results.py builds its str() and HTML from here: hints only, no circle
+    from .results import Result, TestResult
+    from .spec import Case, Function
 
 BADGE = {"passed": "PASS", "partial": "PART", "failed": "FAIL", "not_implemented": "TODO",
          "not_run": "----"}
@@ -65,6 +71,23 @@ def _score(t: TestResult) -> str:
     if not t.test.points:
         return f"{t.n_passed}/{len(t.cases)} cases"
     return f"{_points(t.score)}/{_points(t.test.points)}"
+
+
+def describe_args(fn: Function, case: Case) -> str:
+    """``R = [[...]], t = 0.25`` for messages."""
+    parts = []
+    for name, a in zip(fn.params, case.args, strict=True):
+        shown = show(a) if isinstance(a, np.ndarray) else f"{a:.4g}" if isinstance(a, float) else (
+            _short_text(str(a)) if isinstance(a, str) else repr(a))
+        parts.append(f"{name} = {shown}")
+    return ", ".join(parts)
+
+
+def _short_text(s: str, limit: int = 60) -> str:
+    """A long string argument (a BVH hierarchy) as its start and its number of lines."""
+    if len(s) <= limit:
+        return repr(s)
+    return f"{s[:limit]!r}... (a text of {len(s.splitlines())} lines)"
 
 
 def test_lines(t: TestResult) -> list[str]:
@@ -172,28 +195,6 @@ def _scored(result: Result) -> list[TestResult]:
     """The tests that count: unscored ones run on data only some machines have, so the
     class's results leave them out and are the same wherever they are graded."""
     return [t for t in result.tests if t.test.points]
-
-
-def gradescope(result: Result) -> dict[str, Any]:
-    """The submission's ``results.json`` in Gradescope's autograder format."""
-    tests = []
-    for t in _scored(result):
-        tests.append({
-            "name": t.test.name,
-            "score": round(t.score, 4),
-            "max_score": t.test.points,
-            "status": "passed" if t.status == "passed" else "failed",
-            "output": bounded("\n".join(map(bounded, test_lines(t))), MAX_FIELD),
-            "visibility": "after_published" if t.test.hidden else "visible",
-        })
-    return {
-        "score": round(result.score, 4),
-        "execution_time": round(result.elapsed, 3),
-        "output": bounded("\n".join(header(result)[1:]), MAX_FIELD) or "Graded.",
-        "visibility": "visible",
-        "stdout_visibility": "hidden",
-        "tests": tests,
-    }
 
 
 CSV_FIXED = ["submission", "score", "max_score", "status", "reason", "misconceptions",

@@ -9,111 +9,19 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .checks import show
+from .results import CaseResult, Result, TestResult
 from .sandbox import DEFAULT_LIMITS, Limits, Outcome, Sandbox, level_for
 from .spec import Assignment, Case, Function, Misconception, Test, case_rng
 from .submission import Source, SubmissionError, import_problems, read_source
 
 ASSIGNMENTS_DIR = Path(__file__).resolve().parents[1] / "assignments"
-
-
-@dataclass
-class CaseResult:
-    """One case: passed or not, why not (one line), and the output if it had the right shape.
-
-    ``kind`` is ``"pass"``, ``"wrong"`` (a valid answer that differs), ``"invalid"`` (wrong
-    type, shape, NaN...), ``"error"`` (``error`` holds its type and message),
-    ``"not_implemented"``, ``"timeout"``, ``"crash"``, ``"garbage"`` or ``"skipped"``.
-    """
-
-    case: Case
-    kind: str
-    reason: str = ""
-    got: Any = None
-    expected: Any = None
-    error: dict[str, Any] | None = None
-
-    @property
-    def passed(self) -> bool:
-        return self.kind == "pass"
-
-
-@dataclass
-class TestResult:
-    """A test's cases, its score (points times the fraction passed) and its diagnosis."""
-
-    test: Test
-    function: Function
-    cases: list[CaseResult] = field(default_factory=list)
-    misconception: Misconception | None = None
-    note: str = ""  # why the test did not run at all (rejected, missing function, ...)
-
-    @property
-    def n_passed(self) -> int:
-        return sum(c.passed for c in self.cases)
-
-    @property
-    def score(self) -> float:
-        return self.test.points * self.n_passed / len(self.cases) if self.cases else 0.0
-
-    @property
-    def status(self) -> str:
-        if self.note or not self.cases:
-            return "not_run"
-        if self.n_passed == len(self.cases):
-            return "passed"
-        if all(c.kind == "not_implemented" for c in self.cases):
-            return "not_implemented"
-        return "partial" if self.n_passed else "failed"
-
-    @property
-    def first_failure(self) -> CaseResult | None:
-        return next((c for c in self.cases if not c.passed), None)
-
-
-@dataclass
-class Result:
-    """The outcome of grading one submission."""
-
-    assignment: Assignment
-    submission: Path
-    tests: list[TestResult]
-    hidden_run: bool
-    problems: list[str] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-    output: str = ""
-    elapsed: float = 0.0
-    isolation: str = ""
-
-    @property
-    def score(self) -> float:
-        return sum(t.score for t in self.tests)
-
-    @property
-    def max_score(self) -> float:
-        """The points of all but the bonus tests."""
-        return sum(t.test.points for t in self.tests if not t.test.bonus)
-
-    @property
-    def bonus_score(self) -> float:
-        return sum(t.score for t in self.tests if t.test.bonus)
-
-    def __str__(self) -> str:
-        from .report import text
-
-        return text(self)
-
-    def _repr_html_(self) -> str:
-        from .report import html
-
-        return html(self)
 
 
 @dataclass(frozen=True)
@@ -190,6 +98,7 @@ def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared,
             _skip_all(result, "not run: the file could not be loaded (see above)")
             return
         for p, tr in zip(prepared, result.tests, strict=True):
+            started_at = time.monotonic()
             fn = tr.function
             if fn.name in sandbox.missing:
                 tr.note = f"{assignment.template} has no function {fn.name}()"
@@ -201,9 +110,10 @@ def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared,
                 forged = next(o for o in outcomes if o.status == "garbage")
                 outcomes = [forged] * len(outcomes)
             catalogue = assignment.misconceptions_of(fn.name)
-            tr.cases = [_judge(fn, c, e, o, sandbox.memory_mb, source.locate, catalogue)
+            tr.cases = [judge(fn, c, e, o, sandbox.memory_mb, source.locate, catalogue)
                         for c, e, o in zip(p.cases, p.expected, outcomes, strict=True)]
             tr.misconception = diagnose(assignment, fn, tr.cases)
+            tr.elapsed = time.monotonic() - started_at
         result.output = sandbox.output()
 
 
@@ -214,8 +124,11 @@ def _numbers(x: Any) -> int:
     return int(np.size(x)) if isinstance(x, (np.ndarray, np.generic, int, float)) else 1
 
 
-def _judge(fn: Function, case: Case, expected: Any, out: Outcome, memory_mb: int | None,
-           locate: Callable[[int], str], catalogue: tuple[Misconception, ...]) -> CaseResult:
+def judge(fn: Function, case: Case, expected: Any, out: Outcome, memory_mb: int | None,
+          locate: Callable[[int], str], catalogue: tuple[Misconception, ...]) -> CaseResult:
+    """One case's verdict from what the call gave (``out``): validated, compared, an error
+    explained by the ``catalogue`` if it can be (public: the notebooks' self-checks,
+    :mod:`course.exercises`, judge their calls with it too)."""
     if out.status == "ok":
         assert out.value is not None
         v = fn.check.validate(fn.name, out.value, expected)
@@ -255,7 +168,7 @@ def _explained(m: Misconception, error: dict[str, Any], case: Case) -> str | Non
 
 
 def _error_text(error: dict[str, Any], locate: Callable[[int], str]) -> str:
-    text = error.get("type", "Exception")
+    text: str = error.get("type", "Exception")
     if error.get("message"):
         text += f": {error['message']}"
     where = error.get("where")
@@ -289,6 +202,7 @@ def _reproduces(m: Misconception, fn: Function, c: CaseResult) -> bool:
         with np.errstate(all="ignore"):
             if m.symptom is not None:
                 return bool(m.symptom(c.got, *c.case.args))
+            assert m.wrong is not None  # Misconception holds exactly one of wrong, symptom
             wrong = m.wrong(*c.case.args)
     except Exception:  # a variant undefined on this input reproduces nothing
         return False
@@ -298,20 +212,3 @@ def _reproduces(m: Misconception, fn: Function, c: CaseResult) -> bool:
 def seed_from_env(seed: str | None) -> str | None:
     """``seed`` if given, else ``$AUTOGRADER_SEED`` (empty counts as none)."""
     return seed or os.environ.get("AUTOGRADER_SEED") or None
-
-
-def describe_args(fn: Function, case: Case) -> str:
-    """``R = [[...]], t = 0.25`` for messages."""
-    parts = []
-    for name, a in zip(fn.params, case.args, strict=True):
-        text = show(a) if isinstance(a, np.ndarray) else f"{a:.4g}" if isinstance(a, float) else (
-            _short_text(str(a)) if isinstance(a, str) else repr(a))
-        parts.append(f"{name} = {text}")
-    return ", ".join(parts)
-
-
-def _short_text(s: str, limit: int = 60) -> str:
-    """A long string argument (a BVH hierarchy) as its start and its number of lines."""
-    if len(s) <= limit:
-        return repr(s)
-    return f"{s[:limit]!r}... (a text of {len(s.splitlines())} lines)"

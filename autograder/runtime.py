@@ -26,6 +26,7 @@ import subprocess
 import sys
 import sysconfig
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -163,7 +164,7 @@ def _numpy_filter(rel: Path) -> bool:
     return "tests" not in rel.parts and rel.suffix not in (".pyi", ".h", ".c", ".pxd")
 
 
-def _tree(src: Path, dst: Path, keep) -> None:
+def _tree(src: Path, dst: Path, keep: Callable[[Path], bool]) -> None:
     """Hard links (or copies) of the files below ``src`` that ``keep`` their relative path."""
     for here, dirs, files in os.walk(src):
         rel = Path(here).relative_to(src)

@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 from functools import cache
 from importlib.util import find_spec
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import IO, Any
 
 import numpy as np
 
@@ -92,7 +92,8 @@ class Isolation(str, enum.Enum):
     PORTABLE = "portable"
 
     __str__ = str.__str__
-    __format__ = str.__format__
+    # Formats as its value, as a str does (Enum's own __format__ is typed for Enum).
+    __format__ = str.__format__  # type: ignore[assignment]
 
     @property
     def rank(self) -> int:
@@ -120,7 +121,8 @@ LEVELS = tuple(level.value for level in Isolation)
 # namespace) or, run as the sandbox user without namespaces, that user's threads and
 # processes together, so a submission there holds at most TASKS x memory_mb.
 TASKS = {Isolation.BUBBLEWRAP: 32, Isolation.UNPRIVILEGED: 4}
-ISOLATION_NOTES = {
+# Keyed by the levels, looked up by them or by their names (a Result holds the name).
+ISOLATION_NOTES: dict[str, str] = {
     Isolation.BUBBLEWRAP: "",
     Isolation.UNPRIVILEGED: "(No private file system in this run: the sandbox runs your code "
                             "as an unprivileged user with time, memory and file limits, and "
@@ -260,7 +262,7 @@ class Replies:
     that waiting for one can end at a deadline on every platform (``select`` cannot wait on
     a pipe on Windows), and a child writing frames in a loop only fills its pipe."""
 
-    def __init__(self, stream: BinaryIO):
+    def __init__(self, stream: IO[bytes]):
         self.stream = stream
         self._asked = threading.Semaphore(0)
         self._got: queue.SimpleQueue[tuple[Any, Exception | None]] = queue.SimpleQueue()
@@ -345,7 +347,7 @@ class Sandbox:
                 os.chmod(self.runtime, 0o755)
                 os.chown(self.work, SANDBOX_UID, SANDBOX_UID)
                 os.chmod(self.work, 0o700)
-        self.proc: subprocess.Popen | None = None
+        self.proc: subprocess.Popen[bytes] | None = None
         self.missing: list[str] = []
         self.load_error: dict[str, Any] | None = None
         self.stdout = self.root / "stdout.txt"
@@ -354,13 +356,13 @@ class Sandbox:
     def __enter__(self) -> Sandbox:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.stop()
         remove_tree(self.root)
 
     # --- lifecycle ---------------------------------------------------------------------------
 
-    def _command(self, config: dict, program: list[str] | None = None
+    def _command(self, config: dict[str, Any], program: list[str] | None = None
                  ) -> tuple[list[str], list[int]]:
         """The command that starts the child, and the descriptors it must inherit (the
         bubblewrap level reads its files and filter from them). ``program``: the
@@ -427,7 +429,7 @@ class Sandbox:
         first = self._receive(time.monotonic() + self.limits.load_timeout, "your file")
         if first.status != "ok":
             return first
-        frame = first.value if isinstance(first.value, dict) else {}
+        frame: dict[str, Any] = first.value if isinstance(first.value, dict) else {}
         if frame.get("op") == "load_error":
             try:
                 self.load_error = _error(frame.get("error"))
@@ -446,8 +448,8 @@ class Sandbox:
         self.missing = list(missing)
         return Outcome("ok")
 
-    def spawn(self, config: dict, program: list[str] | None = None,
-              **popen: Any) -> subprocess.Popen:
+    def spawn(self, config: dict[str, Any], program: list[str] | None = None,
+              **popen: Any) -> subprocess.Popen[bytes]:
         """Start the child's process as :meth:`_command` says, as :data:`SANDBOX_UID` when the
         grader is root (a submission never runs as root), with a pipe for its input."""
         cmd, fds = self._command(config, program)
@@ -580,7 +582,9 @@ class Sandbox:
             except (ProtocolError, KeyError, TypeError) as exc:
                 return outcomes + [self._fatal("garbage", _forged(fn) + f" ({exc})")]
         done = self._receive(time.monotonic() + self.limits.case_timeout, fn)
-        if done.status != "ok" or done.value != {"done": True, "nonce": nonce}:
+        # _receive's value is the raw frame (a dict), not a decoded Value.
+        if done.status != "ok" or done.value != {  # type: ignore[comparison-overlap]
+                "done": True, "nonce": nonce}:
             bad = done if done.status != "ok" else self._fatal("garbage", _forged(fn))
             return [bad] * len(cases)
         return outcomes
@@ -605,7 +609,7 @@ class Sandbox:
             return self._fatal("garbage", _forged(what) + f" ({exc})")
         if frame is None:
             return self._fatal("crash", what)
-        return Outcome("ok", value=frame)  # type: ignore[arg-type]
+        return Outcome("ok", value=frame)
 
     def _budget_message(self) -> str:
         return (f"not run: your submission used its whole time budget ({self.limits.budget:g} s "

@@ -113,7 +113,8 @@ class Misconception:
 
 @dataclass(frozen=True)
 class Assignment:
-    """An assignment: its template file, functions, tests, allowed imports and catalogue."""
+    """An assignment: its template file, functions, tests, allowed imports and catalogue
+    (its own ``misconceptions`` and the ``shared`` ones of every assignment)."""
 
     key: str
     title: str
@@ -122,6 +123,8 @@ class Assignment:
     tests: tuple[Test, ...]
     misconceptions: tuple[Misconception, ...] = ()
     allowed_imports: frozenset[str] = field(default_factory=lambda: frozenset({"numpy"}))
+    #: the mistakes every assignment can show (:mod:`autograder.catalogue`), added on loading
+    shared: tuple[Misconception, ...] = ()
 
     def function(self, name: str) -> Function:
         for f in self.functions:
@@ -130,7 +133,16 @@ class Assignment:
         raise KeyError(name)
 
     def misconceptions_of(self, name: str) -> tuple[Misconception, ...]:
-        return tuple(m for m in self.misconceptions if m.function == name)
+        """The mistakes known for function ``name``: the assignment's own first, then the
+        shared ones it does not name more specifically (the same key)."""
+        own = tuple(m for m in self.misconceptions if m.function == name)
+        keys = {m.key for m in own}
+        return own + tuple(m for m in self.shared if m.function == name and m.key not in keys)
+
+    @property
+    def catalogue(self) -> tuple[Misconception, ...]:
+        """Every mistake the diagnosis can name, function by function."""
+        return tuple(m for f in self.functions for m in self.misconceptions_of(f.name))
 
 
 def case_rng(test: Test, seed: str | None) -> np.random.Generator:

@@ -84,7 +84,7 @@ class SubmissionError(ValueError):
     """The submission cannot be read (not UTF-8, not a notebook, ...)."""
 
 
-def printable(text: str | os.PathLike) -> str:
+def printable(text: str | os.PathLike[str]) -> str:
     """A file name or path as it can be shown and written anywhere: bytes that are not UTF-8
     as ``\\xe9``, control and invisible characters escaped (``\\n``, ``\\x1b``,
     ``\\u202e``)."""

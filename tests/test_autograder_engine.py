@@ -14,6 +14,7 @@ from autograder import Limits, check
 from autograder.assignments import load
 from autograder.checks import MatrixCheck, QuatCheck, TupleCheck
 from autograder.cli import main
+from autograder.gradescope.feedback import results_json
 from autograder.protocol import (
     ProtocolError,
     Value,
@@ -22,7 +23,6 @@ from autograder.protocol import (
     read_frame,
     write_frame,
 )
-from autograder.report import gradescope
 from autograder.spec import case_rng
 from autograder.submission import import_problems, source_from_notebook
 
@@ -143,7 +143,7 @@ def test_gradescope_json_hides_hidden_tests_until_published(tmp_path):
                                                      ).read_text()
     (tmp_path / "s.py").write_text(src)
     result = check("a1", tmp_path / "s.py", seed="k", limits=LIMITS)
-    data = gradescope(result)
+    data = results_json(result, "Graded s.py.")
     assert data["stdout_visibility"] == "hidden" and data["execution_time"] >= 0
     assert {t["visibility"] for t in data["tests"] if "hidden" in t["name"]} == {"after_published"}
     mul = [t for t in data["tests"] if t["name"].startswith("quat_mul")]

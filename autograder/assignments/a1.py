@@ -24,7 +24,8 @@ INTRINSIC = ref.TAIT_BRYAN_ORDERS + ref.PROPER_EULER_ORDERS
 
 def _quat(rng: np.random.Generator) -> np.ndarray:
     q = rng.normal(size=4)
-    return q / np.linalg.norm(q)
+    unit: np.ndarray = q / np.linalg.norm(q)
+    return unit
 
 
 def _axis(rng: np.random.Generator, unit: bool = True) -> np.ndarray:
@@ -55,11 +56,11 @@ def _mat(q: np.ndarray) -> np.ndarray:
     return ref.matrix_from_quat(q)
 
 
-def quat_from_matrix_random(rng):
+def quat_from_matrix_random(rng: np.random.Generator) -> list[Case]:
     return [Case(f"random rotation #{i + 1}", (_mat(_quat(rng)),)) for i in range(10)]
 
 
-def quat_from_matrix_edges(rng):
+def quat_from_matrix_edges(rng: np.random.Generator) -> list[Case]:
     diag = _e(1, 1, 0) / np.sqrt(2)
     return [
         Case("identity", (np.eye(3),)),
@@ -72,16 +73,16 @@ def quat_from_matrix_edges(rng):
     ]
 
 
-def quat_from_matrix_hidden(rng):
+def quat_from_matrix_hidden(rng: np.random.Generator) -> list[Case]:
     return [Case(f"hidden rotation #{i + 1}",
                  (_mat(_near_half_turn(rng) if i % 4 == 3 else _quat(rng)),)) for i in range(24)]
 
 
-def matrix_from_quat_random(rng):
+def matrix_from_quat_random(rng: np.random.Generator) -> list[Case]:
     return [Case(f"random quaternion #{i + 1}", (_quat(rng),)) for i in range(10)]
 
 
-def matrix_from_quat_edges(rng):
+def matrix_from_quat_edges(rng: np.random.Generator) -> list[Case]:
     return [
         Case("identity (1, 0, 0, 0)", (IDENTITY,)),
         Case("-identity (-1, 0, 0, 0), the same rotation", (-IDENTITY,)),
@@ -93,16 +94,16 @@ def matrix_from_quat_edges(rng):
     ]
 
 
-def matrix_from_quat_hidden(rng):
+def matrix_from_quat_hidden(rng: np.random.Generator) -> list[Case]:
     return [Case(f"hidden quaternion #{i + 1}", (_quat(rng),)) for i in range(24)]
 
 
-def axis_angle_random(rng):
+def axis_angle_random(rng: np.random.Generator) -> list[Case]:
     return [Case(f"random unit axis and angle #{i + 1}", (_axis(rng), rng.uniform(-PI, PI)))
             for i in range(10)]
 
 
-def axis_angle_edges(rng):
+def axis_angle_edges(rng: np.random.Generator) -> list[Case]:
     return [
         Case("angle 0", (_axis(rng), 0.0)),
         Case("90° about z", (Z, PI / 2)),
@@ -115,18 +116,18 @@ def axis_angle_edges(rng):
     ]
 
 
-def axis_angle_hidden(rng):
+def axis_angle_hidden(rng: np.random.Generator) -> list[Case]:
     return [Case(f"hidden axis and angle #{i + 1}", (_axis(rng, unit=False),
                                                      rng.uniform(-2 * PI, 2 * PI)))
             for i in range(24)]
 
 
-def euler_random(rng):
+def euler_random(rng: np.random.Generator) -> list[Case]:
     return [Case(f"random angles, order {o}", (rng.uniform(-PI, PI, 3), o))
             for o in TAIT_BRYAN for _ in range(2)]
 
 
-def euler_edges(rng):
+def euler_edges(rng: np.random.Generator) -> list[Case]:
     a, c = rng.uniform(-PI, PI, 2)
     return [
         Case("zero angles, XYZ", (np.zeros(3), "XYZ")),
@@ -140,16 +141,16 @@ def euler_edges(rng):
     ]
 
 
-def euler_hidden(rng):
+def euler_hidden(rng: np.random.Generator) -> list[Case]:
     return [Case(f"hidden angles #{i + 1}, order {o}", (rng.uniform(-PI, PI, 3), o))
             for i, o in enumerate(rng.choice(INTRINSIC, 24))]
 
 
-def mul_random(rng):
+def mul_random(rng: np.random.Generator) -> list[Case]:
     return [Case(f"random pair #{i + 1}", (_quat(rng), _quat(rng))) for i in range(10)]
 
 
-def mul_edges(rng):
+def mul_edges(rng: np.random.Generator) -> list[Case]:
     q = _quat(rng)
     i, j, k = _e(0, 1, 0, 0), _e(0, 0, 1, 0), _e(0, 0, 0, 1)
     return [
@@ -165,16 +166,16 @@ def mul_edges(rng):
     ]
 
 
-def mul_hidden(rng):
+def mul_hidden(rng: np.random.Generator) -> list[Case]:
     return [Case(f"hidden pair #{i + 1}", (_quat(rng), _quat(rng))) for i in range(24)]
 
 
-def _pair_short(rng):
+def _pair_short(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     q0, q1 = _quat(rng), _quat(rng)
     return q0, (q1 if q0 @ q1 >= 0 else -q1)
 
 
-def slerp_random(rng):
+def slerp_random(rng: np.random.Generator) -> list[Case]:
     out = []
     for i in range(10):
         q0, q1 = _pair_short(rng)
@@ -183,7 +184,7 @@ def slerp_random(rng):
     return out
 
 
-def slerp_edges(rng):
+def slerp_edges(rng: np.random.Generator) -> list[Case]:
     q0, q1 = _pair_short(rng)
     near = ref.quat_mul(q0, ref.quat_from_axis_angle(_axis(rng), 2e-7))
     return [
@@ -199,7 +200,7 @@ def slerp_edges(rng):
     ]
 
 
-def slerp_hidden(rng):
+def slerp_hidden(rng: np.random.Generator) -> list[Case]:
     return [Case(f"hidden pair #{i + 1}", (_quat(rng), _quat(rng), rng.uniform(0, 1)))
             for i in range(24)]
 
@@ -207,46 +208,41 @@ def slerp_hidden(rng):
 # --- the catalogue of known mistakes ---------------------------------------------------------
 
 
-def _xyzw(q):  # a scalar-first quaternion written scalar-last
+def _xyzw(q: np.ndarray) -> np.ndarray:  # a scalar-first quaternion written scalar-last
     return np.roll(q, -1)
 
 
-def _wxyz(p):  # a scalar-last array read as the scalar-first quaternion it meant
+def _wxyz(p: np.ndarray) -> np.ndarray:  # a scalar-last array read as the quaternion it meant
     return np.roll(p, 1)
 
 
-def _conj(q):
-    return np.asarray(q) * _e(1, -1, -1, -1)
+def _conj(q: np.ndarray) -> np.ndarray:
+    conj: np.ndarray = np.asarray(q) * _e(1, -1, -1, -1)
+    return conj
 
 
-def _trace_only(R):
+def _trace_only(R: np.ndarray) -> np.ndarray:
     with np.errstate(all="ignore"):
         w = np.sqrt(1 + np.trace(R)) / 2
-        return np.array([w, R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / _e(
+        q: np.ndarray = np.array([w, R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / _e(
             1, 4 * w, 4 * w, 4 * w)
+        return q
 
 
-def _slerp_long_way(q0, q1, t):
+def _slerp_long_way(q0: np.ndarray, q1: np.ndarray, t: float) -> np.ndarray:
     omega = np.arccos(np.clip(q0 @ q1, -1, 1))
     with np.errstate(all="ignore"):
-        return (np.sin((1 - t) * omega) * q0 + np.sin(t * omega) * q1) / np.sin(omega)
+        q: np.ndarray = (np.sin((1 - t) * omega) * q0 + np.sin(t * omega) * q1) / np.sin(omega)
+        return q
 
 
-def _elementary_flipped(angles, order):
+def _elementary_flipped(angles: np.ndarray, order: str) -> np.ndarray:
     m = [ref.matrix_from_euler(_e(*np.eye(3)[n] * -angles[n]), order) for n in range(3)]
     return m[0] @ m[1] @ m[2]
 
 
-XYZW = ("quaternion written as (x, y, z, w)",
-        "The course stores the scalar first, q = (w, x, y, z) = (cos θ/2, sin θ/2·u); your "
-        "result has w last, as (x, y, z, w) (the order of scipy and Unity).")
-DEGREES = ("degrees for radians",
-           "The angles arrive in radians already; converting them again with np.radians / "
-           "np.deg2rad shrinks every turn by a factor 180/π ≈ 57.")
-
 MISCONCEPTIONS = (
     # quat_from_matrix
-    Misconception("xyzw", "quat_from_matrix", *XYZW, lambda R: _xyzw(ref.quat_from_matrix(R))),
     Misconception(
         "conjugate", "quat_from_matrix", "the conjugate (inverse) quaternion",
         "The vector part comes from R - Rᵀ: x = (R₂₁ - R₁₂)/(4w), y = (R₀₂ - R₂₀)/(4w), "
@@ -285,26 +281,17 @@ MISCONCEPTIONS = (
         "A right-handed turn by θ about u is q = (cos θ/2, +sin θ/2·u); your vector part has "
         "the opposite sign, which is the inverse rotation q*.",
         lambda axis, angle: _conj(ref.quat_from_axis_angle(axis, angle))),
-    Misconception("degrees", "quat_from_axis_angle", *DEGREES,
-                  lambda axis, angle: ref.quat_from_axis_angle(axis, np.radians(angle))),
-    Misconception("xyzw", "quat_from_axis_angle", *XYZW,
-                  lambda axis, angle: _xyzw(ref.quat_from_axis_angle(axis, angle))),
     # matrix_from_euler
     Misconception(
         "extrinsic", "matrix_from_euler", "extrinsic instead of intrinsic",
         "Uppercase \"XYZ\" is intrinsic, about the moving axes: R = R_X(a) R_Y(b) R_Z(c); you "
         "multiplied in the extrinsic order R_Z(c) R_Y(b) R_X(a) (what \"xyz\" means).",
         lambda angles, order: ref.matrix_from_euler(angles, order.lower())),
-    Misconception("degrees", "matrix_from_euler", *DEGREES,
-                  lambda angles, order: ref.matrix_from_euler(np.radians(angles), order)),
     Misconception(
         "elementary_sign", "matrix_from_euler", "elementary rotations turning the wrong way",
         "R_X(θ) = [[1, 0, 0], [0, cos θ, -sin θ], [0, sin θ, cos θ]] (likewise R_Y, R_Z): the "
         "-sin θ is above the diagonal; with the signs swapped each factor turns by -θ.",
         _elementary_flipped),
-    Misconception("transposed", "matrix_from_euler", "the transposed matrix (the inverse)",
-                  "Your matrix is Rᵀ = R⁻¹, the inverse rotation of R = R_X(a) R_Y(b) R_Z(c).",
-                  lambda angles, order: ref.matrix_from_euler(angles, order).T),
     # quat_mul
     Misconception(
         "reversed", "quat_mul", "the product in the wrong order",

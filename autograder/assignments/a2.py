@@ -17,7 +17,9 @@ tests, reported as such. Reference: :mod:`course.bvh` and :mod:`course.fk`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import cache
+from typing import Any
 
 import numpy as np
 
@@ -25,7 +27,7 @@ from course import rotations as rot
 from course.bvh import parse_bvh
 from course.fk import forward_kinematics as ref_fk
 from course.fk import local_from_global as ref_local
-from course.motion import is_end_site
+from course.motion import Motion, is_end_site
 
 from ..checks import IndexCheck, PointsCheck, QuatCheck, StringsCheck, TupleCheck
 from ..spec import Assignment, Case, Function, Misconception, Picture, Test
@@ -42,7 +44,7 @@ def hierarchy_of(text: str) -> str:
     return text if at < 0 else text[:at]
 
 
-def parse_reference(text: str):
+def parse_reference(text: str) -> tuple[list[str], np.ndarray, np.ndarray]:
     motion = parse_bvh(text if "MOTION" in text else text + EMPTY_MOTION, source="hierarchy")
     sk = motion.skeleton
     return list(sk.names), np.asarray(sk.parents, dtype=np.int64), np.array(sk.offsets)
@@ -56,7 +58,7 @@ def sample_files() -> tuple[tuple[str, str], ...]:
 
     wave = (files("course.data") / "samples" / "wave.bvh").read_text(encoding="utf-8")
     rng = np.random.default_rng(105)  # fixed: these files are the same everywhere
-    styles = (
+    styles: tuple[tuple[str, dict[str, Any]], ...] = (
         ("the root's rotation channels before its position, mixed orders",
          {"n": 5, "rotation_first": True, "newline": "\n"}),
         ("leaves with CHANNELS but no End Site, tabs", {"n": 7, "end_sites": False,
@@ -88,7 +90,7 @@ def local_clips() -> tuple[tuple[str, str], ...]:
 
 
 @cache
-def clip_motion(label: str):
+def clip_motion(label: str) -> Motion:
     return parse_bvh(dict(sample_files() + local_clips())[label], source=label)
 
 
@@ -99,7 +101,7 @@ ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
 
 def _number(rng: np.random.Generator, x: float) -> str:
     """``x`` written as exporters do: fixed decimals, short, or in exponent form."""
-    return rng.choice([f"{x:.6f}", f"{x:g}", f"{x:.4e}", f"{x:.2f}"])
+    return str(rng.choice([f"{x:.6f}", f"{x:g}", f"{x:.4e}", f"{x:.2f}"]))
 
 
 def random_parents(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -172,20 +174,20 @@ def with_motion(rng: np.random.Generator, text: str, frames: int) -> str:
 # --- cases per function ------------------------------------------------------------------------
 
 
-def parse_samples(rng):
+def parse_samples(rng: np.random.Generator) -> list[Case]:
     return [Case(label, (hierarchy_of(text),)) for label, text in sample_files()]
 
 
-def parse_local(rng):
+def parse_local(rng: np.random.Generator) -> list[Case]:
     return [Case(label, (hierarchy_of(text),)) for label, text in local_clips()]
 
 
-def parse_generated(rng):
+def parse_generated(rng: np.random.Generator) -> list[Case]:
     return [Case(f"generated hierarchy #{i + 1} ({n} joints)", (random_hierarchy(rng, n),))
             for i, n in enumerate((1, 2, 4, 7, 12, 20))]
 
 
-def parse_hidden(rng):
+def parse_hidden(rng: np.random.Generator) -> list[Case]:
     return [Case(f"hidden hierarchy #{i + 1}", (random_hierarchy(rng, int(rng.integers(2, 28))),))
             for i in range(12)]
 
@@ -194,17 +196,21 @@ def _quats(rng: np.random.Generator, n: int, spread: float = np.pi) -> np.ndarra
     axes = rng.normal(size=(n, 3))
     q = rot.quat_from_axis_angle(axes / np.linalg.norm(axes, axis=-1, keepdims=True),
                                  rng.uniform(-spread, spread, n))
-    return q * rng.choice([-1.0, 1.0], (n, 1))  # either sign: q and -q are one rotation
+    signed: np.ndarray = q * rng.choice([-1.0, 1.0], (n, 1))  # q and -q are one rotation
+    return signed
 
 
-def _random_pose(rng: np.random.Generator, n: int):
+def _random_pose(
+    rng: np.random.Generator, n: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     parents = random_parents(rng, n)
     offsets = rng.normal(0, 3, (n, 3))
     return parents, offsets, _quats(rng, n), rng.normal(0, 10, 3)
 
 
-def _clip_frames(rng, per_clip: int, clips=sample_files) -> list[Case]:
-    out = []
+def _clip_frames(rng: np.random.Generator, per_clip: int,
+                 clips: Callable[[], tuple[tuple[str, str], ...]] = sample_files) -> list[Case]:
+    out: list[Case] = []
     for label, _ in clips():
         m = clip_motion(label)
         frames = np.unique(np.r_[0, rng.integers(0, m.n_frames, per_clip - 1)])
@@ -215,15 +221,15 @@ def _clip_frames(rng, per_clip: int, clips=sample_files) -> list[Case]:
     return out
 
 
-def fk_samples(rng):
+def fk_samples(rng: np.random.Generator) -> list[Case]:
     return _clip_frames(rng, 3)
 
 
-def fk_local(rng):
+def fk_local(rng: np.random.Generator) -> list[Case]:
     return _clip_frames(rng, 3, local_clips)
 
 
-def fk_random(rng):
+def fk_random(rng: np.random.Generator) -> list[Case]:
     chain = np.arange(-1, 5, dtype=np.int64)
     ones = np.tile([1.0, 0, 0, 0], (6, 1))
     straight = np.tile([0.0, 1.0, 0.0], (6, 1))
@@ -245,25 +251,26 @@ def fk_random(rng):
     ]
 
 
-def fk_hidden(rng):
+def fk_hidden(rng: np.random.Generator) -> list[Case]:
     return [*_clip_frames(rng, 2),
             *(Case(f"hidden tree and pose #{i + 1}", _random_pose(rng, int(rng.integers(2, 30))))
               for i in range(10))]
 
 
-def _orientation_case(label: str, parents, offsets, quats, root) -> Case:
+def _orientation_case(label: str, parents: np.ndarray, offsets: np.ndarray, quats: np.ndarray,
+                      root: np.ndarray) -> Case:
     _, Q = ref_fk(parents, offsets, rot.quat_normalize(quats), root)
     return Case(label, (np.asarray(parents, dtype=np.int64), np.array(Q)))
 
 
-def local_random(rng):
+def local_random(rng: np.random.Generator) -> list[Case]:
     return [_orientation_case(c.label.replace("frame", "orientations of frame"), *c.args)
             for c in _clip_frames(rng, 2)[:4]] + [
         _orientation_case(f"orientations of a random pose #{i + 1}", *_random_pose(rng, n))
         for i, n in enumerate((4, 9, 16))]
 
 
-def local_edges(rng):
+def local_edges(rng: np.random.Generator) -> list[Case]:
     chain = np.arange(-1, 4, dtype=np.int64)
     q = _quats(rng, 1)[0]
     return [
@@ -276,12 +283,12 @@ def local_edges(rng):
     ]
 
 
-def local_hidden(rng):
+def local_hidden(rng: np.random.Generator) -> list[Case]:
     return [_orientation_case(f"hidden pose #{i + 1}", *_random_pose(rng, int(rng.integers(2, 30))))
             for i in range(10)]
 
 
-def pose_reference(text: str, frame: np.ndarray):
+def pose_reference(text: str, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     line = " ".join(repr(float(v)) for v in frame)
     m = parse_bvh(f"{hierarchy_of(text)}MOTION\nFrames: 1\nFrame Time: 0.01\n{line}\n",
                   source="frame")
@@ -289,12 +296,14 @@ def pose_reference(text: str, frame: np.ndarray):
 
 
 def _random_frame(rng: np.random.Generator, text: str) -> np.ndarray:
-    chans = [c for cs in parse_bvh(hierarchy_of(text) + EMPTY_MOTION).channels for c in cs]
+    channels = parse_bvh(hierarchy_of(text) + EMPTY_MOTION).channels
+    assert channels is not None  # parse_bvh records every joint's channels
+    chans = [c for cs in channels for c in cs]
     return np.array([rng.normal(0, 20) if c.endswith("position") else rng.uniform(-180, 180)
                      for c in chans])
 
 
-def pose_visible(rng):
+def pose_visible(rng: np.random.Generator) -> list[Case]:
     out = []
     for label, text in sample_files():
         m = parse_bvh(text, source=label)
@@ -314,7 +323,7 @@ def _motion_line(text: str, frame: int) -> np.ndarray:
     return np.array([float(v) for v in data[frame].split()])
 
 
-def pose_hidden(rng):
+def pose_hidden(rng: np.random.Generator) -> list[Case]:
     out = []
     for i in range(8):
         text = random_hierarchy(rng, int(rng.integers(2, 16)))
@@ -325,8 +334,9 @@ def pose_hidden(rng):
 # --- the catalogue of known mistakes -----------------------------------------------------------
 
 
-def _fk_variant(parents, offsets, quats, root, *, compose_reversed=False, own=False,
-                no_parent_position=False):
+def _fk_variant(parents: np.ndarray, offsets: np.ndarray, quats: np.ndarray, root: np.ndarray,
+                *, compose_reversed: bool = False, own: bool = False,
+                no_parent_position: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Forward kinematics with one of the classic slips, joint by joint."""
     quats = rot.quat_normalize(np.asarray(quats, dtype=float))
     n = len(parents)
@@ -340,7 +350,7 @@ def _fk_variant(parents, offsets, quats, root, *, compose_reversed=False, own=Fa
     return P, Q
 
 
-def _without_end_sites(text: str):
+def _without_end_sites(text: str) -> tuple[list[str], np.ndarray, np.ndarray]:
     names, parents, offsets = parse_reference(text)
     sk = parse_bvh(hierarchy_of(text) + EMPTY_MOTION).skeleton
     keep = [j for j in range(sk.n_joints) if not is_end_site(sk, j)]
@@ -349,7 +359,7 @@ def _without_end_sites(text: str):
             offsets[keep])
 
 
-def _accumulated_offsets(text: str):
+def _accumulated_offsets(text: str) -> tuple[list[str], np.ndarray, np.ndarray]:
     names, parents, offsets = parse_reference(text)
     rest = np.array(offsets)
     for j in range(1, len(parents)):
@@ -358,12 +368,14 @@ def _accumulated_offsets(text: str):
 
 
 def _euler_variant(text: str, frame: np.ndarray, *, always_xyz: bool = False,
-                   by_name: bool = True, degrees: bool = True):
+                   by_name: bool = True, degrees: bool = True
+                   ) -> tuple[np.ndarray, np.ndarray]:
     """``pose_from_frame`` with one slip: every joint composed as R_X R_Y R_Z whatever its
     CHANNELS order (``always_xyz``; each angle about the axis its channel names, or with
     ``by_name=False`` the three values in file order taken as x, y, z), or the angles left
     in degrees (``degrees=False``)."""
     motion = parse_bvh(hierarchy_of(text) + EMPTY_MOTION)
+    assert motion.channels is not None  # parse_bvh records every joint's channels
     root, quats = pose_reference(text, frame)
     k = 0
     for j, chans in enumerate(motion.channels):
@@ -442,7 +454,7 @@ MISCONCEPTIONS = (
 # --- pictures of a failing case ----------------------------------------------------------------
 
 
-def _tree(parents) -> np.ndarray | None:
+def _tree(parents: Any) -> np.ndarray | None:  # a student's answer: anything
     """``parents`` as integers if they describe a tree listed parents first, else None."""
     p = np.asarray(parents)
     if p.ndim != 1 or not len(p) or p[0] != -1 or np.any(p[1:] < 0) or np.any(
@@ -451,7 +463,7 @@ def _tree(parents) -> np.ndarray | None:
     return p.astype(np.int64)
 
 
-def _posed(parents, offsets, quats, root) -> np.ndarray | None:
+def _posed(parents: Any, offsets: Any, quats: Any, root: Any) -> np.ndarray | None:
     """Joint positions p_i = p_parent + Q_parent l_i, or None if the tree is not one."""
     tree = _tree(parents)
     q = np.asarray(quats, dtype=float)
@@ -460,41 +472,45 @@ def _posed(parents, offsets, quats, root) -> np.ndarray | None:
     return np.array(ref_fk(tree, np.asarray(offsets, float), rot.quat_normalize(q), root)[0])
 
 
-def parse_picture(got, expected, args) -> Picture | None:
+# got: the student's answer (anything); expected: the reference's; args: the case's.
+def parse_picture(got: Any, expected: Any, args: tuple[Any, ...]) -> Picture | None:
     """The rest pose of your hierarchy (offsets added up along the parents) and the expected."""
     mine = _posed(got[1], got[2], np.tile([1.0, 0, 0, 0], (len(got[1]), 1)), np.zeros(3))
     if mine is None:
         return None
     rest = _posed(expected[1], expected[2], np.tile([1.0, 0, 0, 0], (len(expected[1]), 1)),
                   np.zeros(3))
+    if rest is None:  # the reference's own tree: never, but then there is nothing to draw
+        return None
     return Picture("the rest pose of your hierarchy (offsets added along the parents) and the "
                    "expected one", np.asarray(got[1], np.int64), mine, rest,
                    expected_parents=np.asarray(expected[1], np.int64))
 
 
-def fk_picture(got, expected, args) -> Picture:
+def fk_picture(got: Any, expected: Any, args: tuple[Any, ...]) -> Picture:
     return Picture("your forward kinematics and the expected pose", args[0], got[0], expected[0])
 
 
-def local_picture(got, expected, args) -> Picture | None:
+def local_picture(got: Any, expected: Any, args: tuple[Any, ...]) -> Picture | None:
     """The pose your local rotations give a skeleton of unit bones along y."""
     parents = args[0]
     bones = np.tile([0.0, 1.0, 0.0], (len(parents), 1))
     mine = _posed(parents, bones, got, np.zeros(3))
-    if mine is None:
+    want = _posed(parents, bones, expected, np.zeros(3))
+    if mine is None or want is None:
         return None
     return Picture("the pose your local rotations give (every bone 1 long, along y at rest) and "
-                   "the expected one", parents, mine,
-                   _posed(parents, bones, expected, np.zeros(3)))
+                   "the expected one", parents, mine, want)
 
 
-def pose_picture(got, expected, args) -> Picture | None:
+def pose_picture(got: Any, expected: Any, args: tuple[Any, ...]) -> Picture | None:
     _, parents, offsets = parse_reference(args[0])
     mine = _posed(parents, offsets, got[1], got[0])
-    if mine is None:
+    want = _posed(parents, offsets, expected[1], expected[0])
+    if mine is None or want is None:
         return None
     return Picture("the pose your frame gives the file's skeleton, and the expected one",
-                   parents, mine, _posed(parents, offsets, expected[1], expected[0]))
+                   parents, mine, want)
 
 
 # --- the assignment ----------------------------------------------------------------------------

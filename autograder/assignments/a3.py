@@ -15,6 +15,7 @@ Reference: :mod:`course.ik` and numpy closed forms.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ import numpy as np
 from course import rotations as rot
 from course.ik import ccd_positions, fabrik_positions, two_link
 
+from ..catalogue import pivot_mistakes
 from ..checks import Check, PointsCheck, TupleCheck, show
 from ..spec import Assignment, Case, Function, Misconception, Picture, Test
 
@@ -30,7 +32,8 @@ STRETCH_TOL = 1e-3  # times the chain's length: how close to straight an out-of-
 
 
 def _norm(v: np.ndarray) -> np.ndarray:
-    return np.linalg.norm(v, axis=-1)
+    n: np.ndarray = np.linalg.norm(v, axis=-1)
+    return n
 
 
 def bones(P: np.ndarray) -> np.ndarray:
@@ -172,11 +175,13 @@ def random_chain(rng: np.random.Generator, n: int, bend: float = 0.6) -> np.ndar
 
 def _direction(rng: np.random.Generator) -> np.ndarray:
     v = rng.normal(size=3)
-    return v / _norm(v)
+    unit: np.ndarray = v / _norm(v)
+    return unit
 
 
 def reachable_target(rng: np.random.Generator, P: np.ndarray, lo=0.25, hi=0.85) -> np.ndarray:
-    return P[0] + rng.uniform(lo, hi) * bones(P).sum() * _direction(rng)
+    target: np.ndarray = P[0] + rng.uniform(lo, hi) * bones(P).sum() * _direction(rng)
+    return target
 
 
 def _solves(method, P, t, tol, max_iter) -> bool:
@@ -187,7 +192,7 @@ def _solves(method, P, t, tol, max_iter) -> bool:
 
 
 def ik_cases(rng, method, max_iter: int, count: int, label: str) -> list[Case]:
-    out = []
+    out: list[Case] = []
     while len(out) < count:
         n = int(rng.integers(3, 9))
         P = random_chain(rng, n)
@@ -237,31 +242,32 @@ def _fabrik(P, t, tol, max_iter):
 CCD_ITER, FABRIK_ITER = 200, 100
 
 
-def ccd_random(rng):
+def ccd_random(rng: np.random.Generator) -> list[Case]:
     return ik_cases(rng, _ccd, CCD_ITER, 6, "random chain")
 
 
-def ccd_edges(rng):
+def ccd_edges(rng: np.random.Generator) -> list[Case]:
     return ik_edges(rng, _ccd, CCD_ITER)
 
 
-def ccd_hidden(rng):
+def ccd_hidden(rng: np.random.Generator) -> list[Case]:
     return _hidden_ik_cases(rng, _ccd, CCD_ITER)
 
 
-def fabrik_random(rng):
+def fabrik_random(rng: np.random.Generator) -> list[Case]:
     return ik_cases(rng, _fabrik, FABRIK_ITER, 6, "random chain")
 
 
-def fabrik_edges(rng):
+def fabrik_edges(rng: np.random.Generator) -> list[Case]:
     return ik_edges(rng, _fabrik, FABRIK_ITER)
 
 
-def fabrik_hidden(rng):
+def fabrik_hidden(rng: np.random.Generator) -> list[Case]:
     return _hidden_ik_cases(rng, _fabrik, FABRIK_ITER)
 
 
-def _hidden_ik_cases(rng, solver, max_iter):
+def _hidden_ik_cases(rng: np.random.Generator, solver: Callable[..., np.ndarray],
+                     max_iter: int) -> list[Case]:
     """Random reachable chains plus one target twice the chain's reach away."""
     cases = ik_cases(rng, solver, max_iter, 8, "hidden chain")
     P = random_chain(rng, 6)
@@ -277,12 +283,12 @@ def _two_link_case(rng, label: str, d_frac: float) -> Case:
     return Case(label, (a, b, c, t, pole))
 
 
-def two_link_random(rng):
+def two_link_random(rng: np.random.Generator) -> list[Case]:
     return [_two_link_case(rng, f"random limb #{i + 1}", rng.uniform(0.4, 0.95))
             for i in range(8)]
 
 
-def two_link_edges(rng):
+def two_link_edges(rng: np.random.Generator) -> list[Case]:
     a, b, c = np.zeros(3), np.array([0.0, -1.0, 0.1]), np.array([0.0, -2.0, 0.0])
     l1, l2 = 1.0, float(_norm(c - b))
     knee_front = np.array([0.0, -1.0, 5.0])
@@ -302,7 +308,7 @@ def two_link_edges(rng):
     ]
 
 
-def two_link_hidden(rng):
+def two_link_hidden(rng: np.random.Generator) -> list[Case]:
     return [_two_link_case(rng, f"hidden limb #{i + 1}", rng.uniform(0.1, 1.3)) for i in range(16)]
 
 
@@ -324,12 +330,12 @@ def jacobian_reference(positions, axes, eps: float = 1e-6):
     return np.stack(cols, axis=1)
 
 
-def jacobian_random(rng):
+def jacobian_random(rng: np.random.Generator) -> list[Case]:
     return [Case(f"random hinge chain #{i + 1} ({n} joints)", hinge_chain(rng, n))
             for i, n in enumerate((1, 2, 3, 5, 8))]
 
 
-def jacobian_edges(rng):
+def jacobian_edges(rng: np.random.Generator) -> list[Case]:
     planar = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2.5, 1, 0]], dtype=float)
     z = np.tile([0.0, 0.0, 1.0], (3, 1))
     P, axes = hinge_chain(rng, 3)
@@ -345,7 +351,7 @@ def jacobian_edges(rng):
     ]
 
 
-def jacobian_hidden(rng):
+def jacobian_hidden(rng: np.random.Generator) -> list[Case]:
     return [Case(f"hidden hinge chain #{i + 1}", hinge_chain(rng, int(rng.integers(1, 9))))
             for i in range(10)]
 
@@ -356,7 +362,7 @@ def dls_reference(J, error, damping):
     return J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(m), error)
 
 
-def dls_random(rng):
+def dls_random(rng: np.random.Generator) -> list[Case]:
     out = []
     for m, n in ((3, 2), (3, 3), (3, 5), (3, 8), (2, 4), (6, 7)):
         damping = float(rng.choice([0.05, 0.3, 1.0]))
@@ -365,7 +371,7 @@ def dls_random(rng):
     return out
 
 
-def dls_edges(rng):
+def dls_edges(rng: np.random.Generator) -> list[Case]:
     P = np.outer(np.arange(4.0), [1.0, 0, 0])
     J_stretched = jacobian_reference(P, np.tile([0.0, 0.0, 1.0], (3, 1)))  # all columns along y
     return [
@@ -385,7 +391,7 @@ def dls_edges(rng):
     ]
 
 
-def dls_hidden(rng):
+def dls_hidden(rng: np.random.Generator) -> list[Case]:
     return [Case(f"hidden J #{i + 1}", (rng.normal(size=(3, n)), rng.normal(size=3),
                                         float(rng.uniform(0.01, 2.0))))
             for i, n in enumerate(rng.integers(2, 9, 10))]
@@ -401,23 +407,29 @@ def trace_reference(positions, curve, tol, max_iter):
 
 
 def _curve_case(rng, label: str, n: int, k: int) -> Case:
-    P = random_chain(rng, n)
-    reach = bones(P).sum()
-    u, w = _direction(rng), _direction(rng)
-    w -= (w @ u) * u
-    w /= _norm(w)
-    s = np.linspace(0, 2 * np.pi, k, endpoint=False)
-    centre = P[0] + 0.4 * reach * _direction(rng)
-    curve = centre + 0.3 * reach * (np.cos(s)[:, None] * u + np.sin(2 * s)[:, None] * w / 2)
-    return Case(label, (P, curve, 1e-4, FABRIK_ITER))
+    """A figure eight the reference traces point by point within a quarter of its iterations
+    (a chain with one dominant bone cannot reach points near its root: drawn again)."""
+    while True:
+        P = random_chain(rng, n)
+        reach = bones(P).sum()
+        u, w = _direction(rng), _direction(rng)
+        w -= (w @ u) * u
+        w /= _norm(w)
+        s = np.linspace(0, 2 * np.pi, k, endpoint=False)
+        centre = P[0] + 0.4 * reach * _direction(rng)
+        curve = centre + 0.3 * reach * (np.cos(s)[:, None] * u + np.sin(2 * s)[:, None] * w / 2)
+        poses = trace_reference(P, curve, 1e-4, max(1, FABRIK_ITER // 4))
+        if not any(chain_problems(pose, P, point, 1e-4) for pose, point in zip(
+                poses, curve, strict=True)):
+            return Case(label, (P, curve, 1e-4, FABRIK_ITER))
 
 
-def trace_visible(rng):
+def trace_visible(rng: np.random.Generator) -> list[Case]:
     return [_curve_case(rng, f"a figure eight of {k} points, {n} joints", n, k)
             for n, k in ((4, 24), (7, 40))]
 
 
-def trace_hidden(rng):
+def trace_hidden(rng: np.random.Generator) -> list[Case]:
     return [_curve_case(rng, f"hidden curve #{i + 1}", int(rng.integers(3, 8)), 30)
             for i in range(3)]
 
@@ -479,6 +491,16 @@ def _wrong_joint(got, positions, target, tol, max_iter):
                for half in (True, False))
 
 
+def _origin_pivot(got, positions, *_):
+    """Every joint as far from the origin as it started (turns about the origin keep |p_k|,
+    and nothing else does that in general) while the bones changed length. A simulation would
+    not do: turned about the origin, CCD is chaotic, and rounding alone parts two runs."""
+    scale = 1e-6 * max(1.0, float(bones(positions).sum()))
+    return got.shape == positions.shape and bool(
+        np.all(np.abs(_norm(got) - _norm(positions)) <= scale)
+        and not np.allclose(bones(got), bones(positions), atol=scale))
+
+
 def _antiparallel_skipped(got, positions, target, *_):
     """Unchanged on a chain where every e - r_i points straight away from t - r_i."""
     u, v = positions[-1] - positions[:-1], target - positions[:-1]
@@ -499,7 +521,7 @@ def _axis_in_wrong_frame(got, positions, axes):
 
 
 def _singular(J: np.ndarray) -> bool:
-    return np.linalg.cond(J @ J.T) > 1e10
+    return bool(np.linalg.cond(J @ J.T) > 1e10)
 
 
 def _undamped(got, J, error, damping):
@@ -515,7 +537,7 @@ def _undamped(got, J, error, damping):
     return not np.all(np.isfinite(got)) or _norm(got) > _norm(error) / (2 * damping) * (1 + 1e-6)
 
 
-def _undamped_error(error: dict, J, e, damping) -> str | None:
+def _undamped_error(error: dict[str, Any], J, e, damping) -> str | None:
     if error.get("type") != "LinAlgError" or not _singular(J):
         return None
     (m, n), rank = J.shape, np.linalg.matrix_rank(J)
@@ -548,18 +570,8 @@ MISCONCEPTIONS = (
         "e - r_i (say (e - r_i) × x̂, or × ŷ when that is 0), then p_k ← r_i + R(p_k - r_i).",
         symptom=_antiparallel_skipped),
     Misconception("unchanged", "ccd", *UNCHANGED, symptom=_unchanged),
-    Misconception(
-        "effector_pivot", "ccd", "rotating about the end effector",
-        "CCD turns the sub-chain beyond joint i about the joint itself: with R the shortest "
-        "arc from e - r_i to t - r_i, p_k ← r_i + R(p_k - r_i) for k > i; turning about e "
-        "leaves the effector where it is and stretches bone i.",
-        symptom=_effector_pivot),
-    Misconception(
-        "wrong_joint", "ccd", "the turn measured at the wrong joint",
-        "Joint i's turn is the shortest arc R from e - r_i to t - r_i, both measured from r_i, "
-        "the joint that turns: p_k ← r_i + R(p_k - r_i) for k > i; your turns match arcs "
-        "measured from the next joint, e - r_{i+1} to t - r_{i+1}.",
-        symptom=_wrong_joint),
+    *pivot_mistakes("ccd", {"effector_pivot": _effector_pivot, "wrong_joint": _wrong_joint,
+                            "origin_pivot": _origin_pivot}),
     Misconception("unchanged", "fabrik", *UNCHANGED, symptom=_unchanged),
     Misconception(
         "no_reanchor", "fabrik", "the root not re-anchored (no backward pass)",
@@ -652,7 +664,8 @@ _FUNCTIONS = (
 )
 
 
-def _tests(fn: str, visible, edges, hidden, points: tuple[float, float, float]) -> tuple:
+def _tests(fn: str, visible, edges, hidden, points: tuple[float, float, float]
+           ) -> tuple[Test, Test, Test]:
     return (Test(f"{fn}: random cases", fn, points[0], visible),
             Test(f"{fn}: edge cases", fn, points[1], edges),
             Test(f"{fn}: hidden cases", fn, points[2], hidden, hidden=True))

@@ -1,0 +1,616 @@
+r"""Assignment a5, animation: the spec ``assignments/a5_animation.py`` is checked by.
+
+Keyframes: ``catmull_rom`` and ``squad`` are compared with :mod:`course.keyframes` at many
+times, the key times among them (where a spline must pick the right segment). The implicit
+Euler step has one right answer, the minimiser of
+
+.. math:: E(x) = \frac{1}{2h^2}\lVert x - y\rVert_M^2 + U(x),\qquad y = x_n + h v_n + h^2 g,
+
+and is graded by what makes it right, computed here from the student's positions (never
+trusted from the student): the fixed points held exactly, the gradient :math:`\nabla E` small
+at the answer (it is 0 at the minimum), the velocity :math:`v^+ = (x^+ - x_n)/h`, and the
+positions within a tolerance of :func:`course.physics.implicit_euler_step`'s. The cases are
+small (at most 6×6 particles) so that a dense ``np.linalg.solve`` per Newton iteration passes
+the time limit, and many have compressed springs, where the Hessian's
+:math:`(1 - L/\lVert d\rVert)` term is negative and matters.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from course import keyframes as kf
+from course import rotations as rot
+from course.physics import SpringSystem, grid_cloth, implicit_euler_gradient, step
+
+from ..checks import PointsCheck, QuatCheck, TupleCheck, show
+from ..spec import Assignment, Case, Function, Misconception, Test
+
+GRAD_TOL = 1e-6  # the step's ‖∇E‖ may be this times the force scale (see force_scale)
+FIXED_TOL = 1e-9  # metres a fixed particle may drift (rounding only)
+VELOCITY_TOL = 1e-6  # relative: |v⁺ - (x⁺ - x)/h| against the velocities' scale
+GRAVITY = np.array([0.0, -9.81, 0.0])
+
+
+# --- Catmull-Rom -------------------------------------------------------------------------------
+
+
+def hermite_segments(keys: np.ndarray, times: np.ndarray, t: np.ndarray, start: np.ndarray,
+                     end: np.ndarray) -> np.ndarray:
+    """The Hermite cubic of segment ``i`` (``t_i <= t < t_{i+1}``, the last key in the last
+    segment) with end tangents ``start[i]``, ``end[i]`` per unit ``u = (t - t_i)/h_i``."""
+    i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2)
+    u = ((t - times[i]) / (times[i + 1] - times[i]))[:, None]
+    hermite: np.ndarray = ((2 * u**3 - 3 * u**2 + 1) * keys[i] + (u**3 - 2 * u**2 + u) * start[i]
+            + (-2 * u**3 + 3 * u**2) * keys[i + 1] + (u**3 - u**2) * end[i])
+    return hermite
+
+
+def _velocities(keys: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """m_i = (p_{i+1} - p_{i-1})/(t_{i+1} - t_{i-1}); one-sided at the ends."""
+    m = np.empty_like(keys)
+    m[1:-1] = (keys[2:] - keys[:-2]) / (times[2:] - times[:-2])[:, None]
+    m[0] = (keys[1] - keys[0]) / (times[1] - times[0])
+    m[-1] = (keys[-1] - keys[-2]) / (times[-1] - times[-2])
+    return m
+
+
+def catmull_rom_variants(keys: np.ndarray, times: np.ndarray, t: np.ndarray
+                        ) -> dict[str, np.ndarray]:
+    """Catmull-Rom with the tangents scaled by the wrong interval, as students write it."""
+    h = np.diff(times)[:, None]
+    m = _velocities(keys, times)
+    unit = np.empty_like(keys)  # the textbook's (p_{i+1} - p_{i-1})/2 per unit u
+    unit[1:-1] = (keys[2:] - keys[:-2]) / 2
+    unit[0], unit[-1] = keys[1] - keys[0], keys[-1] - keys[-2]
+    own = m.copy()  # divided by twice the key's own segment, 2 h_i, not t_{i+1} - t_{i-1}
+    own[1:-1] = (keys[2:] - keys[:-2]) / (2 * h[1:])
+    return {"uniform": hermite_segments(keys, times, t, unit[:-1], unit[1:]),
+            "per unit u": hermite_segments(keys, times, t, m[:-1], m[1:]),
+            "own segment": hermite_segments(keys, times, t, h * own[:-1], h * own[1:])}
+
+
+def _wrong_interval(got: Any, keys: np.ndarray, times: np.ndarray, t: np.ndarray) -> bool:
+    return any(np.allclose(got, w, atol=1e-6)
+               for w in catmull_rom_variants(keys, times, t).values())
+
+
+def _wrong_at_keys(got: Any, keys: np.ndarray, times: np.ndarray, t: np.ndarray) -> bool:
+    """Wrong (or NaN) only where t is a key time."""
+    at_key = np.isin(t, times)
+    right = np.all(np.isclose(got, kf.catmull_rom(keys, times, t), atol=1e-6), axis=1)
+    return bool(np.all(right[~at_key]) and not np.all(right[at_key]))
+
+
+def _index_past_the_end(error: dict[str, Any], keys: np.ndarray, times: np.ndarray, t: np.ndarray
+                        ) -> str | None:
+    if error.get("type") != "IndexError" or times[-1] not in t:
+        return None
+    n = len(times)
+    return (f"t = {times[-1]:g} is the last key; np.searchsorted(times, t, side='right') - 1 "
+            f"gives {n - 1}, a segment [t_{n - 1}, t_{n}] that does not exist: clip i to "
+            f"K - 2 = {n - 2} (the last segment ends at the last key, u = 1)")
+
+
+def _key_times(rng: np.random.Generator, n: int, lo: float = 0.3, hi: float = 2.0) -> np.ndarray:
+    times: np.ndarray = rng.uniform(-1, 1) + np.cumsum(np.r_[0.0, rng.uniform(lo, hi, n - 1)])
+    return times
+
+
+def _times_with_keys(times: np.ndarray, n: int = 20) -> np.ndarray:
+    """``n`` times across the keys, and every key time (where the segment index matters)."""
+    return np.unique(np.r_[np.linspace(times[0], times[-1], n), times])
+
+
+def _spline_case(rng: np.random.Generator, label: str, n_keys: int, dim: int) -> Case:
+    times = _key_times(rng, n_keys)
+    return Case(label, (rng.normal(0, 2, (n_keys, dim)), times, _times_with_keys(times)))
+
+
+def catmull_random(rng: np.random.Generator) -> list[Case]:
+    return [_spline_case(rng, f"{k} keys in {d}D, uneven times", k, d)
+            for k, d in ((4, 2), (5, 3), (6, 2), (7, 3), (8, 1))]
+
+
+def catmull_edges(rng: np.random.Generator) -> list[Case]:
+    uneven = np.array([0.0, 0.1, 3.0, 3.2, 10.0])
+    even = np.arange(6.0)
+    return [
+        Case("two keys: one segment, both tangents the secant", (rng.normal(size=(2, 3)),
+                                                                 np.array([1.0, 2.5]),
+                                                                 np.linspace(1, 2.5, 7))),
+        Case("three keys", (rng.normal(size=(3, 2)), np.array([0.0, 0.5, 2.0]),
+                            _times_with_keys(np.array([0.0, 0.5, 2.0])))),
+        Case("very uneven times (0, 0.1, 3, 3.2, 10)", (rng.normal(size=(5, 2)), uneven,
+                                                        _times_with_keys(uneven, 40))),
+        Case("one key per second (h = 1: every scaling agrees)",
+             (rng.normal(size=(6, 3)), even, _times_with_keys(even))),
+        Case("the key times only", (rng.normal(size=(5, 3)), uneven, uneven.copy())),
+        Case("times far from 0 (t = 100 ... 104)", (rng.normal(size=(4, 2)),
+                                                    np.array([100.0, 101.0, 101.5, 104.0]),
+                                                    np.linspace(100, 104, 17))),
+    ]
+
+
+def catmull_hidden(rng: np.random.Generator) -> list[Case]:
+    return [_spline_case(rng, f"hidden spline #{i + 1}", int(rng.integers(3, 10)),
+                         int(rng.integers(1, 4))) for i in range(8)]
+
+
+# --- SQUAD -------------------------------------------------------------------------------------
+
+
+def _log(q: np.ndarray) -> np.ndarray:
+    """log q = atan2(|v|, w) v/|v| of unit quaternions (..., 4): the sign of q matters."""
+    v = q[..., 1:]
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    log: np.ndarray = np.arctan2(n, q[..., :1]) * np.divide(v, n, out=np.zeros_like(v),
+                                                            where=n > 1e-300)
+    return log
+
+
+def _exp(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return np.concatenate([np.cos(n), np.sinc(n / np.pi) * v], axis=-1)
+
+
+def _towards(a: np.ndarray, b: np.ndarray, u: np.ndarray, shortest: bool) -> np.ndarray:
+    """slerp(a, b, u) = a exp(u log(a⁻¹ b)), the shortest way (b ← -b if a·b < 0) or, with
+    ``shortest=False``, the way the signs happen to point."""
+    if shortest:
+        b = b * np.where(np.sum(a * b, axis=-1, keepdims=True) < 0, -1.0, 1.0)
+    return rot.quat_mul(a, _exp(u * _log(rot.quat_mul(rot.quat_conjugate(a), b))))
+
+
+def squad_formula(q_keys: np.ndarray, times: np.ndarray, t: np.ndarray,
+                  shortest: bool = True) -> np.ndarray:
+    """Shoemake's SQUAD with the controls of :func:`course.keyframes.squad_controls`, written
+    out; ``shortest=False`` skips putting the keys in one hemisphere first and every slerp
+    goes the way the signs point."""
+    q = q_keys / np.linalg.norm(q_keys, axis=-1, keepdims=True)
+    if shortest:
+        q = kf.same_hemisphere(q)
+    s = q.copy()
+    if len(q) > 2:
+        inv = rot.quat_conjugate(q[1:-1])
+        after, before = (_log(rot.quat_mul(inv, q[2:])), _log(rot.quat_mul(inv, q[:-2])))
+        h = np.diff(times)[:, None]
+        s[1:-1] = rot.quat_mul(q[1:-1], _exp(-(h[:-1] * after + h[1:] * before)
+                                             / (2 * (h[:-1] + h[1:]))))
+    i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2)
+    u = ((t - times[i]) / (times[i + 1] - times[i]))[:, None]
+    return _towards(_towards(q[i], q[i + 1], u, shortest), _towards(s[i], s[i + 1], u, shortest),
+                    2 * u * (1 - u), shortest)
+
+
+def _rotation_keys(rng: np.random.Generator, times: np.ndarray, flips: bool, lo: float = 0.3,
+                   hi: float = 1.8) -> np.ndarray:
+    """A unit key per time, each turned lo..hi rad from the previous; with ``flips`` some are
+    stored as -q (at least one), as keys from a file or an IK solver may be. Keys whose
+    neighbouring controls s_i, s_{i+1} fall in opposite hemispheres are drawn again: there
+    the sign conventions of the inner and outer slerps part, and either answer is fair."""
+    n = len(times)
+    while True:
+        qs = [rot.quat_from_axis_angle(_direction(rng), rng.uniform(0, np.pi))]
+        for _ in range(n - 1):
+            qs.append(rot.quat_mul(qs[-1], rot.quat_from_axis_angle(_direction(rng),
+                                                                    rng.uniform(lo, hi))))
+        q = np.array(qs)
+        s = kf.squad_controls(q, times)
+        if np.all(np.sum(s[1:] * s[:-1], axis=-1) > 0.1):
+            break
+    if flips:
+        sign = np.where(rng.random(n) < 0.4, -1.0, 1.0)
+        sign[int(rng.integers(1, n))] = -sign[0]
+        q = q * sign[:, None]
+    return q
+
+
+def _direction(rng: np.random.Generator) -> np.ndarray:
+    v = rng.normal(size=3)
+    unit: np.ndarray = v / np.linalg.norm(v)
+    return unit
+
+
+def _squad_case(rng: np.random.Generator, label: str, n: int, flips: bool = True) -> Case:
+    times = _key_times(rng, n)
+    return Case(label, (_rotation_keys(rng, times, flips), times, _times_with_keys(times)))
+
+
+def squad_random(rng: np.random.Generator) -> list[Case]:
+    return [_squad_case(rng, f"{n} rotation keys, uneven times, some stored as -q", n)
+            for n in (3, 4, 5, 6, 7)]
+
+
+def squad_edges(rng: np.random.Generator) -> list[Case]:
+    same = np.tile(rot.quat_from_axis_angle(_direction(rng), 1.0), (4, 1))
+    uneven = np.array([0.0, 1.0, 1.5, 3.0])
+    return [
+        Case("two keys: SQUAD is SLERP", (_rotation_keys(rng, np.array([0.0, 1.5]), False),
+                                          np.array([0.0, 1.5]), np.linspace(0, 1.5, 9))),
+        _squad_case(rng, "keys already in one hemisphere", 5, flips=False),
+        Case("every key the same rotation (one stored as -q)",
+             (same * np.array([1, 1, -1, 1.0])[:, None], np.arange(4.0), np.linspace(0, 3, 13))),
+        Case("turns of 2.1 rad (120°) between keys, one stored as -q",
+             (_rotation_keys(rng, uneven, True, 2.0, 2.2), uneven, _times_with_keys(uneven))),
+        Case("one key per second", (_rotation_keys(rng, np.arange(5.0), True), np.arange(5.0),
+                                    _times_with_keys(np.arange(5.0)))),
+    ]
+
+
+def squad_hidden(rng: np.random.Generator) -> list[Case]:
+    return [_squad_case(rng, f"hidden rotation keys #{i + 1}", int(rng.integers(3, 9)))
+            for i in range(8)]
+
+
+# --- the implicit Euler step -------------------------------------------------------------------
+
+
+def step_reference(x: np.ndarray, v: np.ndarray, masses: np.ndarray, springs: np.ndarray,
+                   rest: np.ndarray, k: np.ndarray, h: float, fixed: np.ndarray, gravity: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`course.physics.step`, solved far below the grader's tolerance."""
+    system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
+    x_new, v_new, _ = step(system, x, v, h, tol=1e-11, max_iter=100, solver="direct")
+    return x_new, v_new
+
+
+def force_scale(x: np.ndarray, v: np.ndarray, masses: np.ndarray, springs: np.ndarray,
+                rest: np.ndarray, k: np.ndarray, h: float, fixed: np.ndarray, gravity: np.ndarray
+                ) -> float:
+    """f: the free particles' weights ‖(m_i g)‖ plus the spring forces at the start ‖∇U(x)‖."""
+    system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
+    free = system.free
+    return float(np.linalg.norm(masses[free]) * np.linalg.norm(gravity)
+                 + np.linalg.norm(system.spring_gradient(x)[free]))
+
+
+def spring_hessian(x: np.ndarray, springs: np.ndarray, rest: np.ndarray, k: np.ndarray,
+                   missing_term: bool = False) -> np.ndarray:
+    r"""∇²U, dense (3N, 3N): spring blocks :math:`H_s = k[(1 - L/l) I + (L/l)\hat d\hat d^T]`,
+    or, with ``missing_term``, :math:`k\,\hat d\hat d^T` (the (1 - L/l) term dropped)."""
+    n = len(x)
+    d = x[springs[:, 0]] - x[springs[:, 1]]
+    length = np.linalg.norm(d, axis=1)
+    dh = d / length[:, None]
+    c = np.zeros_like(length) if missing_term else 1.0 - rest / length
+    blocks = k[:, None, None] * (c[:, None, None] * np.eye(3)
+                                 + (1.0 - c)[:, None, None] * dh[:, :, None] * dh[:, None])
+    H = np.zeros((n, 3, n, 3))
+    for (i, j), b in zip(springs, blocks, strict=True):
+        H[i, :, i] += b
+        H[j, :, j] += b
+        H[i, :, j] -= b
+        H[j, :, i] -= b
+    return H.reshape(3 * n, 3 * n)
+
+
+def step_problems(got: Any, x: np.ndarray, v: np.ndarray, masses: np.ndarray,
+                  springs: np.ndarray, rest: np.ndarray, k: np.ndarray, h: float,
+                  fixed: np.ndarray, gravity: np.ndarray) -> list[str]:
+    """What is wrong with ``(x⁺, v⁺)`` as the implicit step, worst first."""
+    args = (x, v, masses, springs, rest, k, h, fixed, gravity)
+    x_new, v_new = got
+    out = []
+    moved = np.linalg.norm(x_new[fixed] - x[fixed], axis=1) if len(fixed) else np.zeros(0)
+    if np.any(moved > FIXED_TOL):
+        i = int(fixed[np.argmax(moved)])
+        out.append(f"fixed particle {i} moved by {moved.max():.3g} (from {show(x[i])} to "
+                   f"{show(x_new[i])}); fixed points stay where they are")
+    g = np.linalg.norm(implicit_euler_gradient(x_new, *args))
+    f = force_scale(*args)
+    if g > GRAD_TOL * f:
+        out.append(f"‖∇E(x⁺)‖ = {g:.3g} at your x⁺, not ≈ 0 (at most {GRAD_TOL * f:.2g}): "
+                   "x⁺ does not minimise E(x) = ‖x - y‖²_M/2h² + U(x)")
+    v_want = (x_new - x) / h
+    dv = float(np.max(np.abs(v_new - v_want)))
+    if dv > VELOCITY_TOL * max(1.0, float(np.max(np.abs(v_want)))):
+        out.append(f"v⁺ differs from (x⁺ - x)/h by up to {dv:.3g}; implicit Euler's "
+                   "x⁺ = x + h v⁺ makes v⁺ = (x⁺ - x)/h")
+    return out
+
+
+class StepCheck(TupleCheck):
+    """``(x⁺, v⁺)``, judged by the step's optimality, then against the reference."""
+
+    def __init__(self) -> None:
+        super().__init__((PointsCheck(atol=1e-6, row="particle"),
+                          PointsCheck(atol=1e-4, row="particle")), ("x", "v"))
+
+    def judge(self, got: Any, expected: Any, args: tuple[Any, ...]) -> str | None:
+        problems = step_problems(got, *args)
+        if problems:
+            return problems[0]
+        why = self.items[0].compare(got[0], expected[0])
+        return f"x {why} (the reference's minimiser)" if why else None
+
+    def show_expected(self, expected: Any, digits: int = 3) -> str:
+        return f"the minimiser of E, x⁺ = {show(expected[0], digits)}"
+
+
+def _free_hessian(x_new: np.ndarray, masses: np.ndarray, springs: np.ndarray, rest: np.ndarray,
+                  k: np.ndarray, h: float, fixed: np.ndarray,
+                  missing_term: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """∇²E = M/h² + ∇²U over the free coordinates, and the mask of those (3N,)."""
+    free = np.ones(len(x_new), dtype=bool)
+    free[fixed] = False
+    dof = np.repeat(free, 3)
+    H = spring_hessian(x_new, springs, rest, k, missing_term) + np.diag(np.repeat(masses, 3)
+                                                                         / h**2)
+    return H[np.ix_(dof, dof)], dof
+
+
+def dense_newton(x: np.ndarray, v: np.ndarray, masses: np.ndarray, springs: np.ndarray,
+                 rest: np.ndarray, k: np.ndarray, h: float, fixed: np.ndarray, gravity: np.ndarray,
+                 max_iter: int = 100) -> tuple[np.ndarray, np.ndarray]:
+    """Newton's method on E(x) = ‖x - y‖²_M/2h² + U(x), fixed points eliminated, dense, with
+    a backtracking line search: the step as a student writes it, independent of
+    :mod:`course.physics`'s sparse solver (the tests compare the two)."""
+    system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
+    y = x + h * v + h * h * gravity
+    xk = y.copy()
+    xk[fixed] = x[fixed]
+
+    def energy(z: np.ndarray) -> float:
+        return 0.5 * np.sum(masses[:, None] * (z - y) ** 2) / h**2 + system.spring_energy(z)
+
+    for _ in range(max_iter):
+        H, dof = _free_hessian(xk, masses, springs, rest, k, h, fixed)
+        g = (masses[:, None] * (xk - y) / h**2 + system.spring_gradient(xk)).ravel()[dof]
+        if np.linalg.norm(g) < 1e-13 * max(1.0, float(np.linalg.norm(masses))):
+            break
+        p = np.linalg.solve(H, -g)
+        if g @ p >= 0:
+            p = -g
+        flat = np.zeros(3 * len(x))
+        flat[dof] = p
+        move = flat.reshape(-1, 3)
+        alpha, e0 = 1.0, energy(xk)
+        while energy(xk + alpha * move) > e0 + 1e-4 * alpha * (g @ p) + 1e-14 * abs(e0) \
+                and alpha > 1e-12:
+            alpha /= 2
+        xk = xk + alpha * move
+    return xk, (xk - x) / h
+
+
+def _explicit(x: np.ndarray, v: np.ndarray, masses: np.ndarray, springs: np.ndarray,
+              rest: np.ndarray, k: np.ndarray, h: float, fixed: np.ndarray, gravity: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """x⁺ = x + h v, v⁺ = v + h M⁻¹ f(x): the explicit step, fixed points held."""
+    system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
+    v_new = v + h * system.forces(x) / masses[:, None]
+    x_new = x + h * v
+    x_new[fixed], v_new[fixed] = x[fixed], 0.0
+    return x_new, v_new
+
+
+def _pushing_springs(got: Any, x: np.ndarray, v: np.ndarray, masses: np.ndarray,
+                     springs: np.ndarray, rest: np.ndarray, k: np.ndarray, h: float,
+                     fixed: np.ndarray, gravity: np.ndarray) -> bool:
+    """The springs push: x⁺ moved from y along +∇U(x⁺), not -∇U(x⁺) (at the right answer
+    M(x⁺ - y)/h² = -∇U(x⁺); with the force flipped, Newton's fixed point has +∇U, and where
+    it does not converge the steps still go uphill in U)."""
+    system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
+    x_new = got[0]
+    if _fixed_moved(got, x, v, masses, springs, rest, k, h, fixed, gravity):
+        return False
+    inertial = (masses[:, None] * (x_new - x - h * v - h * h * gravity) / h**2)[system.free]
+    grad = system.spring_gradient(x_new)[system.free]
+    scale = np.linalg.norm(inertial) * np.linalg.norm(grad)
+    return bool(np.isfinite(scale) and scale > 0 and np.sum(inertial * grad) > 0.2 * scale)
+
+
+def _fixed_moved(got: Any, x: np.ndarray, v: np.ndarray, masses: np.ndarray,
+                 springs: np.ndarray, rest: np.ndarray, k: np.ndarray, h: float,
+                 fixed: np.ndarray, gravity: np.ndarray) -> bool:
+    return bool(len(fixed)) and bool(np.max(np.abs(got[0][fixed] - x[fixed])) > FIXED_TOL)
+
+
+def _stalled_without_the_term(got: Any, *args: Any) -> bool:  # args: a StepArgs
+    """The answer is not optimal where a Newton iteration whose Hessian lacks the
+    (1 - L/l) term stalls: from it, the true Newton step lands on the minimiser while the
+    step with k d̂d̂ᵀ blocks is far shorter (it creeps along the modes that compressed springs
+    soften) or far longer (it overshoots across stretched ones, and the line search cuts it),
+    or the answer is still where compressed springs make ∇²E indefinite."""
+    x, v, masses, springs, rest, k, h, fixed, gravity = args
+    x_new = got[0]
+    if _fixed_moved(got, *args) or not step_problems(got, *args):
+        return False
+    g = implicit_euler_gradient(x_new, *args)
+    H, dof = _free_hessian(x_new, masses, springs, rest, k, h, fixed)
+    H_wrong, _ = _free_hessian(x_new, masses, springs, rest, k, h, fixed, missing_term=True)
+    g = g.ravel()[dof]
+    if np.linalg.eigvalsh(H)[0] <= 0:
+        # stopped where compressed springs make E non-convex (its true Hessian indefinite,
+        # k d̂d̂ᵀ blind to it); the template's Newton leaves such places within 12 iterations
+        length = np.linalg.norm(x_new[springs[:, 0]] - x_new[springs[:, 1]], axis=1)
+        return bool(np.any(length < rest))
+    true_step, wrong_step = np.linalg.solve(H, -g), np.linalg.solve(H_wrong, -g)
+    error = (step_reference(*args)[0] - x_new).ravel()[dof]
+    ratio = np.linalg.norm(wrong_step) / np.linalg.norm(true_step)
+    return bool(np.linalg.norm(true_step - error) <= 0.1 * np.linalg.norm(error)
+                and not 0.5 <= ratio <= 1.5)
+
+
+# A time step's arguments: x, v, masses, springs, rest, k, h, fixed, gravity.
+StepArgs = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float,
+                 np.ndarray, np.ndarray]
+
+
+def _args(x: ArrayLike, v: ArrayLike, masses: ArrayLike,
+          springs: np.ndarray | Sequence[Sequence[int]], rest: ArrayLike, k: ArrayLike, h: float,
+          fixed: ArrayLike) -> StepArgs:
+    return (np.asarray(x, float), np.asarray(v, float), np.asarray(masses, float),
+            np.asarray(springs, np.int64), np.asarray(rest, float),
+            np.broadcast_to(np.asarray(k, float), (len(springs),)).copy(), float(h),
+            np.asarray(fixed, np.int64), GRAVITY.copy())
+
+
+def _cloth(rng: np.random.Generator, rows: int, cols: int, *, squeeze: float = 1.0,
+           stiffness: float = 200.0,
+           h: float = 1 / 60, pinned: str = "top corners", speed: float = 0.3) -> StepArgs:
+    """A small hanging cloth, its positions scaled by ``squeeze`` about its top edge's middle
+    (< 1: every spring compressed), nudged by 1 mm and moving at random velocities."""
+    cloth = grid_cloth(rows, cols, size=0.5, mass=0.1 * rows * cols, stiffness=stiffness,
+                       plane="xy", pinned=pinned)
+    s = cloth.system
+    x = cloth.positions * squeeze + rng.normal(0, 1e-3, cloth.positions.shape)
+    x[s.fixed] = cloth.positions[s.fixed] * squeeze
+    v = rng.normal(0, speed, x.shape)
+    v[s.fixed] = 0.0
+    return _args(x, v, s.masses, s.springs, s.rest, s.k, h, s.fixed)
+
+
+def well_posed(args: StepArgs) -> bool:
+    """E is convex at the reference's answer (one minimiser to agree on), and the template's
+    plain Newton (:func:`dense_newton`) reaches it, far below the grader's tolerance, within
+    12 iterations (a quarter of the 50 the template's solver may take, as in a3)."""
+    x_ref, _ = step_reference(*args)
+    H, _ = _free_hessian(x_ref, *args[2:8])
+    if np.linalg.eigvalsh(H)[0] <= 0:
+        return False
+    with np.errstate(all="ignore"):
+        x_new, _ = dense_newton(*args, max_iter=12)
+    g = np.linalg.norm(implicit_euler_gradient(x_new, *args))
+    return bool(g <= 1e-3 * GRAD_TOL * force_scale(*args)
+                and np.max(np.abs(x_new - x_ref)) <= 1e-8)
+
+
+def _cloth_cases(rng: np.random.Generator, label: str, count: int, squeeze: tuple[float, float],
+                 stiffness: tuple[float, float]) -> list[Case]:
+    out: list[Case] = []
+    while len(out) < count:
+        rows, cols = (int(n) for n in rng.integers(2, 7, 2))
+        sq = float(rng.uniform(*squeeze))
+        args = _cloth(rng, rows, cols, squeeze=sq, stiffness=float(rng.uniform(*stiffness)),
+                      h=float(rng.choice([1 / 30, 1 / 60, 1 / 100])))
+        if well_posed(args):
+            how = "at rest length" if sq == 1 else f"squeezed to {sq:.0%}"
+            out.append(Case(f"{label} #{len(out) + 1}: a {rows}×{cols} cloth {how}", args))
+    return out
+
+
+def step_random(rng: np.random.Generator) -> list[Case]:
+    return (_cloth_cases(rng, "hanging cloth", 3, (1.0, 1.0), (50, 500))
+            + _cloth_cases(rng, "compressed cloth", 4, (0.75, 0.85), (150, 300)))
+
+
+def step_edges(rng: np.random.Generator) -> list[Case]:
+    one = _args([[0.0, 0.0, 0.0], [0.0, -2.0, 0.0]], np.zeros((2, 3)), [1.0, 1.0], [[0, 1]],
+                [1.0], 50.0, 1 / 30, [0])
+    chain = _args(np.c_[np.arange(5.0), np.zeros(5), np.zeros(5)], rng.normal(0, 1, (5, 3)),
+                  np.full(5, 0.2), np.c_[np.arange(4), np.arange(1, 5)], np.full(4, 1.0), 80.0,
+                  1 / 60, [])
+    squeezed = np.c_[np.arange(6.0) * 0.7, np.zeros(6), np.zeros(6)]
+    buckle = _args(squeezed, rng.normal(0, 0.2, (6, 3)), np.full(6, 0.1),
+                   np.c_[np.arange(5), np.arange(1, 6)], np.full(5, 1.0), 100.0, 1 / 50, [0, 5])
+    return [
+        Case("one spring, one end pinned, stretched to twice its rest length", one),
+        Case("a chain of 5 flying free (no fixed points)", chain),
+        Case("a chain squeezed to 70% between two pins (every spring compressed)", buckle),
+        Case("a big time step h = 0.05 (explicit Euler would blow up here)",
+             _cloth(rng, 4, 4, stiffness=300.0, h=0.05)),
+        Case("all four corners pinned", _cloth(rng, 4, 4, pinned="all corners")),
+        Case("a 6×6 cloth squeezed to 80%", _cloth(rng, 6, 6, squeeze=0.8, stiffness=250.0)),
+    ]
+
+
+def step_hidden(rng: np.random.Generator) -> list[Case]:
+    return (_cloth_cases(rng, "hidden cloth", 3, (1.0, 1.0), (50, 1000))
+            + _cloth_cases(rng, "hidden compressed cloth", 3, (0.75, 0.9), (100, 300)))
+
+
+# --- the catalogue of known mistakes -----------------------------------------------------------
+
+MISCONCEPTIONS = (
+    Misconception(
+        "wrong_interval", "catmull_rom", "tangents scaled by the wrong time interval",
+        "m_i = (p_{i+1} - p_{i-1})/(t_{i+1} - t_{i-1}) is a velocity dp/dt, divided by the time "
+        "between the two neighbours; on the segment [t_i, t_{i+1}] the Hermite form takes it "
+        "per unit u as h_i m_i, h_i m_{i+1} (h_i = t_{i+1} - t_i). (p_{i+1} - p_{i-1})/2 per "
+        "unit u is right only when every h_i = 1.",
+        symptom=_wrong_interval),
+    Misconception(
+        "segment_at_key", "catmull_rom", "the wrong segment at a key",
+        "The segment of t is the i with t_i <= t < t_{i+1}, i = searchsorted(times, t, "
+        "side='right') - 1, clipped to 0 ... K - 2 so that the last key t_{K-1} is the end "
+        "(u = 1) of the last segment; your values go wrong exactly at key times.",
+        symptom=_wrong_at_keys, explains=_index_past_the_end),
+    Misconception(
+        "no_shortest_path", "squad", "no shortest path (keys not put in one hemisphere)",
+        "q and -q are the same rotation, but log(q_i⁻¹ q_{i+1}) of keys with q_i·q_{i+1} < 0 "
+        "is the long way round (more than 180°); flip every key into its predecessor's "
+        "hemisphere first, q_i ← -q_i when q_i·q_{i-1} < 0, then build the controls and slerp.",
+        wrong=lambda q, times, t: squad_formula(q, times, t, shortest=False)),
+    Misconception(
+        "explicit", "implicit_euler_step", "an explicit step called implicit",
+        "Implicit Euler takes the force at the END of the step, v⁺ = v + h M⁻¹ f(x⁺), "
+        "x⁺ = x + h v⁺: solve ∇E(x⁺) = M(x⁺ - y)/h² + ∇U(x⁺) = 0 by Newton; x⁺ = x + h v, "
+        "v⁺ = v + h M⁻¹ f(x) uses the force at the start (explicit Euler, unstable for stiff "
+        "springs).",
+        wrong=_explicit),
+    Misconception(
+        "force_sign", "implicit_euler_step", "the spring force with the wrong sign",
+        "∂U/∂x_i = k (1 - L/‖d‖) d with d = x_i - x_j (and the opposite for x_j); the force "
+        "is its negative, pulling a stretched spring's ends together. At the right x⁺, "
+        "M(x⁺ - y)/h² = -∇U(x⁺); yours moved along +∇U(x⁺), as when the sign is flipped "
+        "(Newton then solves M(x - y)/h² - ∇U(x) = 0, or runs uphill in U).",
+        symptom=_pushing_springs),
+    Misconception(
+        "fixed_moved", "implicit_euler_step", "fixed points moved",
+        "Fixed particles are not unknowns: drop their rows and columns from ∇E and ∇²E (solve "
+        "for the free particles only) and keep x⁺_i = x_i, v⁺_i = 0 for them; gravity and "
+        "the springs must not move them.",
+        symptom=_fixed_moved),
+    Misconception(
+        "hessian_missing_term", "implicit_euler_step",
+        "the Hessian without its (1 - L/‖d‖) term",
+        "Spring s's Hessian block is H_s = k[(1 - L/‖d‖) I + (L/‖d‖) d̂d̂ᵀ]; k d̂d̂ᵀ alone drops "
+        "the (1 - L/‖d‖)(I - d̂d̂ᵀ) part, which is negative for a compressed spring "
+        "(‖d‖ < L) and positive for a stretched one: Newton then misjudges the stiffness "
+        "across the springs and crawls (or overshoots) instead of converging, and your "
+        "answer is not yet the minimiser.",
+        symptom=_stalled_without_the_term),
+)
+
+
+# --- the assignment ----------------------------------------------------------------------------
+
+_FUNCTIONS = (
+    Function("catmull_rom", ("keys", "times", "t"), lambda *a: kf.catmull_rom(*a),
+             PointsCheck(atol=1e-6, row="time")),
+    Function("squad", ("q_keys", "times", "t"), lambda *a: kf.squad(*a),
+             QuatCheck(atol=1e-6, shape=None, row="time")),
+    Function("implicit_euler_step",
+             ("x", "v", "masses", "springs", "rest", "k", "h", "fixed", "gravity"),
+             step_reference, StepCheck()),
+)
+
+
+Cases = Callable[[np.random.Generator], list[Case]]  # a test's case generator
+
+
+def _tests(fn: str, visible: Cases, edges: Cases, hidden: Cases,
+           points: tuple[float, float, float]
+           ) -> tuple[Test, Test, Test]:
+    return (Test(f"{fn}: random cases", fn, points[0], visible),
+            Test(f"{fn}: edge cases", fn, points[1], edges),
+            Test(f"{fn}: hidden cases", fn, points[2], hidden, hidden=True))
+
+
+ASSIGNMENT = Assignment(
+    key="a5",
+    title="Keyframes and implicit Euler",
+    template="a5_animation.py",
+    functions=_FUNCTIONS,
+    tests=(
+        *_tests("catmull_rom", catmull_random, catmull_edges, catmull_hidden, (1, 1, 2)),
+        *_tests("squad", squad_random, squad_edges, squad_hidden, (1, 1, 2)),
+        *_tests("implicit_euler_step", step_random, step_edges, step_hidden, (2, 2, 2)),
+    ),
+    misconceptions=MISCONCEPTIONS,
+)

@@ -1,0 +1,215 @@
+"""``python -m autograder.gradescope.run``: grade the one submission of a Gradescope container.
+
+Gradescope runs ``run_autograder`` once per submission, as root, in a fresh container built by
+``setup.sh``. Under ``$AUTOGRADER_ROOT`` (default ``/autograder``) it finds ``source/`` (the
+bundle: this grader, the course's reference, ``bundle.env`` and the secret ``seed``),
+``submission/`` (whatever the student uploaded) and ``submission_metadata.json``, and it reads
+back ``results/results.json``. What is printed here goes to Gradescope's stdout log, which the
+results mark as shown to instructors only.
+
+The sandbox runs at the strongest level the container allows (``$AUTOGRADER_ISOLATION`` may
+ask for a weaker one, as the tests do). Whatever happens, a results.json is written: a
+submission that cannot be graded gets one that says why (like any refused submission), and a
+fault of the grader gets one that tells the student to contact the instructor, with the
+traceback in the log.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sys
+import time
+import traceback
+from importlib.metadata import version
+from pathlib import Path
+from typing import Any
+
+from ..assignments import load
+from ..grading import JUNK, MAX_DEPTH, MAX_ENTRIES, SUFFIXES
+from ..records import not_run
+from ..report import create
+from ..runner import prepare, run
+from ..sandbox import level_for, weaker_warning
+from ..spec import Assignment
+from ..submission import SubmissionError, printable, read_regular
+from .feedback import failure_json, results_json
+from .schema import problems
+
+SOURCE = Path(__file__).resolve().parents[2]  # the bundle's root: $AUTOGRADER_ROOT/source
+CONFIG = "bundle.env"  # ASSIGNMENT=a1, PYTHON_VERSION=3.11, NUMPY_VERSION=2.4.6
+SEED = "seed"
+MAX_METADATA = 1 << 20  # bytes of submission_metadata.json read
+
+
+def main() -> int:
+    start = time.monotonic()
+    root = Path(os.environ.get("AUTOGRADER_ROOT") or "/autograder")
+    try:
+        results = grade(root)
+    except Exception:  # our fault, not the student's: they are told to ask, we log it
+        print("grader fault (the student was told to contact the instructor):", flush=True)
+        traceback.print_exc(file=sys.stdout)
+        results = failure_json(time.monotonic() - start)
+    (root / "results").mkdir(parents=True, exist_ok=True)
+    with create(root / "results" / "results.json") as f:
+        f.write(json.dumps(results, indent=1, allow_nan=False))
+    print(f"results.json written: score {results.get('score')}", flush=True)
+    return 0
+
+
+def config() -> dict[str, str]:
+    """``bundle.env``'s ``KEY=VALUE`` lines (setup.sh sources the same file)."""
+    pairs = (line.split("=", 1) for line in (SOURCE / CONFIG).read_text().splitlines()
+             if "=" in line and not line.lstrip().startswith("#"))
+    return {k.strip(): v.strip().strip("'\"") for k, v in pairs}
+
+
+def grade(root: Path) -> dict[str, Any]:
+    """Grade ``root/submission``; the results in Gradescope's format, checked."""
+    settings = config()
+    seed = protected_seed(root)
+    spec = load(settings["ASSIGNMENT"])
+    metadata = read_metadata(root / "submission_metadata.json")
+    level = level_for(os.environ.get("AUTOGRADER_ISOLATION") or None)
+    print(f"assignment {spec.key}; isolation {level}; submission "
+          f"{metadata.get('id', '(no metadata)')} by {_users(metadata)}", flush=True)
+    warning = weaker_warning(level)
+    if warning:
+        print(warning, flush=True)
+    path, graded = choose(root / "submission", spec)
+    print(graded, flush=True)
+    if path is None:
+        result = not_run(spec, root / "submission", seed, level, graded,
+                         "not run: nothing to grade (see above)")
+        graded = "Nothing was graded."
+    else:
+        result = run(spec, path, seed, level=level)
+    results = results_json(result, graded, {"submission_id": metadata.get("id")})
+    wrong = problems(results)
+    if wrong:
+        raise RuntimeError("results.json does not follow Gradescope's format: "
+                           + "; ".join(wrong))
+    return results
+
+
+def protected_seed(root: Path) -> str:
+    """The bundle's secret seed, after making sure only root (the grader) can read it or
+    anything under ``root``: the submission runs as another user."""
+    seed_file = SOURCE / SEED
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        os.chown(seed_file, 0, 0, follow_symlinks=False)
+    os.chmod(seed_file, 0o400, follow_symlinks=False)
+    os.chmod(root, 0o700)
+    seed = read_regular(seed_file, limit=4096).strip()
+    if not seed:
+        raise RuntimeError(f"the bundle's {SEED} file is empty")
+    return seed
+
+
+def read_metadata(path: Path) -> dict[str, Any]:
+    """Gradescope's ``submission_metadata.json`` (``{}`` if absent or unreadable: it only
+    names the submission in the log)."""
+    if not os.path.lexists(path):
+        return {}
+    try:
+        data = json.loads(read_regular(path, limit=MAX_METADATA))
+    except ValueError as exc:  # a SubmissionError (not a regular file...) or not JSON
+        print(f"warning: {printable(path)} not read: {exc}", flush=True)
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _users(metadata: dict[str, Any]) -> str:
+    users = metadata.get("users")
+    if not isinstance(users, list):
+        return "(unknown)"
+    names = [printable(str(u.get("email") or u.get("name") or u.get("id")))
+             for u in users if isinstance(u, dict)]
+    return ", ".join(names) or "(unknown)"
+
+
+def choose(folder: Path, spec: Assignment) -> tuple[Path | None, str]:
+    """The file of ``folder`` to grade, and a sentence saying which and why (or why none).
+
+    Gradescope passes whatever the student uploaded, under any name: one ``.py`` or
+    ``.ipynb``, several, or folders of them. The file that defines the most of the
+    assignment's functions is graded; on a tie, the one named like the template, then a
+    ``.py`` before a notebook, then the shallowest, then by name.
+    """
+    found = candidates(folder)
+    if not found:
+        return None, (f"No .py or .ipynb file was found in your submission: upload "
+                      f"{spec.template} (or your notebook).")
+    names = [f.name for f in spec.functions]
+    template = Path(spec.template)
+    scored = []
+    for path in found:
+        defined = defines(path, names)
+        rel = path.relative_to(folder)
+        scored.append(((-len(defined), path.stem != template.stem, path.suffix != ".py",
+                        len(rel.parts), str(rel)), path, defined))
+    _, best, defined = min(scored)
+    shown = printable(best.relative_to(folder))
+    if len(found) == 1:
+        return best, f"Graded {shown}."
+    if not defined:
+        return best, (f"Graded {shown}: none of your {len(found)} files defines any of "
+                      f"{', '.join(names)}.")
+    return best, (f"Graded {shown}, the one of your {len(found)} files that defines the most "
+                  f"of the assignment's functions ({len(defined)} of {len(names)}).")
+
+
+def candidates(folder: Path) -> list[Path]:
+    """The ``.py`` and ``.ipynb`` entries below ``folder`` (links too: refused when read),
+    hidden ones and an archiver's or Python's folders left out, no link followed, at most
+    :data:`MAX_DEPTH` levels and :data:`MAX_ENTRIES` entries looked at."""
+    found: list[Path] = []
+    seen = 0
+    for here, dirs, files in os.walk(folder):  # os.walk follows no link to a folder
+        depth = len(Path(here).relative_to(folder).parts)
+        dirs[:] = sorted(d for d in dirs if not d.startswith(".") and d not in JUNK
+                         and depth < MAX_DEPTH)
+        seen += len(dirs) + len(files)
+        found += [Path(here) / f for f in sorted(files)
+                  if Path(f).suffix in SUFFIXES and not f.startswith(".")]
+        if seen > MAX_ENTRIES:
+            break
+    return found
+
+
+def defines(path: Path, names: list[str]) -> list[str]:
+    """Which of ``names`` ``path`` defines with a ``def`` (in a notebook, in a code cell's
+    JSON string); read as text, so a file that does not parse still counts."""
+    try:
+        text = read_regular(path)
+    except (SubmissionError, OSError):
+        return []
+    defined = set(re.findall(r'(?:^|")[ \t]*def[ \t]+(\w+)[ \t]*\(', text, re.MULTILINE))
+    return [n for n in names if n in defined]
+
+
+def check_install() -> None:
+    """setup.sh's last step: this Python and numpy are the pinned ones, the assignment's
+    cases and reference answers compute, and the sandbox starts (its level is printed)."""
+    settings = config()
+    here = f"{sys.version_info.major}.{sys.version_info.minor}"
+    if here != settings["PYTHON_VERSION"]:
+        raise SystemExit(f"setup: Python {here}, but the bundle pins "
+                         f"{settings['PYTHON_VERSION']}")
+    if version("numpy") != settings["NUMPY_VERSION"]:
+        raise SystemExit(f"setup: numpy {version('numpy')}, but the bundle pins "
+                         f"{settings['NUMPY_VERSION']}")
+    spec = load(settings["ASSIGNMENT"])
+    tests = prepare(spec, "setup check")
+    level = level_for(None)
+    print(f"setup: Python {here}, numpy {version('numpy')}, {spec.key} ({len(tests)} tests "
+          f"with the hidden ones), sandbox isolation here: {level}")
+    warning = weaker_warning(level)
+    if warning:
+        print(f"setup: {warning}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

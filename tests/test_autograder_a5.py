@@ -1,0 +1,174 @@
+"""The a5 (keyframes and implicit Euler) autograder: its references against independent ones,
+its judge of the implicit step, and fixture submissions (the reference, each catalogued
+mistake, partial and hostile work). The step is judged by its optimality, computed here."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_autograder_a2 import (
+    assert_catalogue_matches_fixtures,
+    assert_diagnosed,
+    expectation,
+    fixture_submission,
+    visible_cases,
+)
+
+from autograder import Limits, check
+from autograder.assignments import load
+from autograder.assignments.a5 import (
+    catmull_rom_variants,
+    dense_newton,
+    spring_hessian,
+    squad_formula,
+    step_problems,
+    well_posed,
+)
+
+REPO = Path(__file__).resolve().parents[1]
+FIXTURES = REPO / "tests" / "fixtures" / "a5"
+TEMPLATE = REPO / "assignments" / "a5_animation.py"
+LIMITS = Limits(cpu_seconds=8, memory_mb=600, load_timeout=5.0, case_timeout=1.0)
+SEED = "fixture-seed-a5"
+A5 = load("a5")
+
+
+# --- the references and the judge --------------------------------------------------------------
+
+
+def test_catmull_rom_reproduces_a_quadratic_on_even_keys_and_the_variants_differ():
+    times = np.arange(5.0)
+    keys = np.stack([times**2, 3 * times], axis=1)  # central differences are exact here
+    t = np.linspace(1, 3, 9)  # away from the one-sided end tangents
+    cr = A5.function("catmull_rom").reference
+    np.testing.assert_allclose(cr(keys, times, t), np.stack([t**2, 3 * t], axis=1), atol=1e-12)
+    for c in visible_cases(A5, "catmull_rom"):
+        keys, times, at = c.args  # the scalings agree at keys, for h = 1 and for two keys
+        if len(times) > 2 and not np.allclose(np.diff(times), 1.0) and not np.all(
+                np.isin(at, times)):
+            expected = cr(*c.args)
+            assert all(not np.allclose(w, expected, atol=1e-6)
+                       for w in catmull_rom_variants(*c.args).values()), c.label
+
+
+def test_squad_written_out_is_the_library_and_without_the_flip_it_is_not():
+    squad = A5.function("squad")
+    flipped = 0
+    for c in visible_cases(A5, "squad"):
+        expected = squad.reference(*c.args)
+        assert squad.check.close(squad_formula(*c.args), expected), c.label
+        q = c.args[0]
+        if np.any(np.sum(q[1:] * q[:-1], axis=1) < 0) and len(np.unique(q, axis=0)) > 2:
+            assert not squad.check.close(squad_formula(*c.args, shortest=False), expected)
+            flipped += 1
+    assert flipped >= 6
+
+
+def test_the_step_reference_is_a_dense_newton_and_the_hessian_its_finite_differences():
+    step = A5.function("implicit_euler_step")
+    for c in visible_cases(A5, "implicit_euler_step"):
+        expected = step.reference(*c.args)
+        assert step.check.close(dense_newton(*c.args), expected), c.label
+        assert step_problems(expected, *c.args) == [], c.label
+        assert well_posed(c.args), c.label  # the edge cases too: the template's Newton is enough
+    x, _, _, springs, rest, k, *_ = visible_cases(A5, "implicit_euler_step")[3].args
+    assert np.any(np.linalg.norm(x[springs[:, 0]] - x[springs[:, 1]], axis=1) < rest)
+    from course.physics import SpringSystem
+
+    system = SpringSystem.create(np.ones(len(x)), springs, rest, k)
+    eps, H = 1e-6, spring_hessian(x, springs, rest, k)
+    for col in (0, 4, 3 * len(x) - 1):
+        dx = np.zeros(3 * len(x))
+        dx[col] = eps
+        fd = (system.spring_gradient(x + dx.reshape(-1, 3))
+              - system.spring_gradient(x - dx.reshape(-1, 3))).ravel() / (2 * eps)
+        np.testing.assert_allclose(H[:, col], fd, atol=1e-5)
+
+
+def test_the_step_judge_names_the_broken_condition():
+    case = next(c for c in visible_cases(A5, "implicit_euler_step") if "one spring" in c.label)
+    x, v, masses, springs, rest, k, h, fixed, gravity = case.args
+    right = A5.function("implicit_euler_step").reference(*case.args)
+    moved = (right[0] + [0.0, 0.1, 0.0], right[1])
+    assert step_problems(moved, *case.args)[0].startswith("fixed particle 0 moved by 0.1")
+    short = (x + 0.5 * (right[0] - x), right[1])
+    assert "does not minimise E(x)" in step_problems(short, *case.args)[0]
+    assert step_problems((right[0], right[1] + 1.0), *case.args) == [
+        "v⁺ differs from (x⁺ - x)/h by up to 1; implicit Euler's x⁺ = x + h v⁺ makes "
+        "v⁺ = (x⁺ - x)/h"]
+
+
+# --- fixture submissions -----------------------------------------------------------------------
+
+
+def test_reference_gets_full_marks_with_the_hidden_tests():
+    result = check("a5", FIXTURES / "reference.py", seed=SEED, limits=LIMITS)
+    assert result.hidden_run and result.score == result.max_score == 14
+
+
+def test_template_is_not_implemented_yet(monkeypatch):
+    monkeypatch.delenv("AUTOGRADER_SEED", raising=False)
+    result = check("a5", TEMPLATE, limits=LIMITS)
+    assert result.score == 0 and {t.status for t in result.tests} == {"not_implemented"}
+
+
+def test_catalogue_covers_every_mutant():
+    assert_catalogue_matches_fixtures(A5, "a5")
+    assert len(A5.misconceptions) >= 7
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in FIXTURES.glob("mutant_*.py")))
+def test_mutant_is_diagnosed_by_name(name, tmp_path):
+    fn, key = expectation("a5", name)
+    result = check("a5", fixture_submission("a5", name, tmp_path), seed=SEED, limits=LIMITS)
+    assert_diagnosed(result, fn, key)
+
+
+def test_the_unclipped_segment_index_is_explained_at_the_last_key(tmp_path):
+    result = check("a5", fixture_submission("a5", "mutant_catmull_last_key.py", tmp_path),
+                   limits=LIMITS)
+    edges = next(t for t in result.tests if t.test.name == "catmull_rom: edge cases")
+    first = edges.cases[0]
+    assert first.kind == "error" and first.reason.startswith("catmull_rom raised IndexError")
+    assert first.reason.endswith("t = 2.5 is the last key; np.searchsorted(times, t, "
+                                 "side='right') - 1 gives 1, a segment [t_1, t_2] that does not "
+                                 "exist: clip i to K - 2 = 0 (the last segment ends at the last "
+                                 "key, u = 1)")
+
+
+def test_the_missing_hessian_term_shows_on_compressed_springs(tmp_path):
+    result = check("a5", fixture_submission("a5", "mutant_step_hessian_no_term.py", tmp_path),
+                   limits=LIMITS)
+    random = next(t for t in result.tests if t.test.name == "implicit_euler_step: random cases")
+    failed = [c.case.label for c in random.cases if not c.passed]
+    assert failed and all("squeezed" in label for label in failed)
+    assert 0 < random.score < random.test.points
+
+
+def test_controls_for_even_keys_get_partial_credit(tmp_path):
+    result = check("a5", fixture_submission("a5", "partial_squad_even_controls.py", tmp_path),
+                   limits=LIMITS)
+    random, edges = (t for t in result.tests if t.test.function == "squad")
+    assert random.score == 0 and 0 < edges.score < 1 and edges.misconception is None
+    passed = {c.case.label for c in edges.cases if c.passed}
+    assert {"two keys: SQUAD is SLERP", "one key per second"} <= passed
+    assert all(t.status == "passed" for t in result.tests if t.test.function != "squad")
+
+
+def test_running_the_course_library_is_refused(tmp_path):
+    src = fixture_submission("a5", "adv_reads_the_library.py", tmp_path)
+    src.write_text(src.read_text().replace("@REPO@", str(REPO)))
+    result = check("a5", src, limits=LIMITS)
+    step = [t for t in result.tests if t.test.function == "implicit_euler_step"]
+    assert all(t.n_passed == 0 for t in step)
+    assert (f"does not let submissions open '{REPO}/course/physics/mass_spring.py'"
+            in " ".join(str(result).split()))
+
+
+def test_scipy_is_refused_before_anything_runs():
+    result = check("a5", FIXTURES / "adv_import_scipy.py", limits=LIMITS)
+    assert result.score == 0
+    assert ("`from scipy.sparse.linalg import ...` is not allowed: the assignment asks you to "
+            "implement the math yourself with numpy") in " ".join(str(result).split())
