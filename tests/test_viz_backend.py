@@ -126,3 +126,25 @@ def test_trame_is_kept_from_downloading_its_wasm_bundle(monkeypatch, tmp_path):
     monkeypatch.setenv("VTK_WASM_DIR_OVERRIDE", "/somewhere/else")  # the user's own wins
     _backend.configure_environment()
     assert os.environ["VTK_WASM_DIR_OVERRIDE"] == "/somewhere/else"
+
+
+def test_a_kernel_gets_the_browser_rendered_view_unless_the_browser_cannot_reach_it(monkeypatch):
+    import sys
+
+    monkeypatch.delenv("PYVISTA_JUPYTER_BACKEND", raising=False)
+    monkeypatch.delenv("JUPYTERHUB_SERVICE_PREFIX", raising=False)
+    monkeypatch.setattr(_backend, "in_jupyter_kernel", lambda: True)
+    assert _backend.jupyter_backend() == "client"
+    monkeypatch.setitem(sys.modules, "google.colab", object())  # Colab: no port to reach
+    assert _backend.jupyter_backend() == "static"
+    monkeypatch.delitem(sys.modules, "google.colab")
+    monkeypatch.setenv("JUPYTERHUB_SERVICE_PREFIX", "/user/ada/")
+    assert _backend.jupyter_backend() == "client"  # the proxy is installed here
+    monkeypatch.setitem(sys.modules, "jupyter_server_proxy", None)  # a hub without it
+    assert _backend.jupyter_backend() == "static"
+
+
+def test_an_unknown_backend_is_named_in_the_error(monkeypatch):
+    monkeypatch.setenv("PYVISTA_JUPYTER_BACKEND", "webgl")
+    with pytest.raises(ValueError, match="PYVISTA_JUPYTER_BACKEND.*'webgl'"):
+        _backend.jupyter_backend()

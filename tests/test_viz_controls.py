@@ -239,3 +239,111 @@ def test_full_body_ik_pulls_an_inner_joint(sample_motion):
         np.testing.assert_allclose(drawn[foot], fb.positions[foot], atol=1e-9)
     finally:
         fb.close()
+
+
+# -- true starting states: the first picture is what the sliders and readouts say -------------
+
+
+@pytest.fixture
+def draggable_views(monkeypatch):
+    """Controls built as in a server-rendered live view (a target handle to drag), without
+    starting a trame server: the view widget is a placeholder."""
+    import ipywidgets as widgets
+
+    from course.viz import scene
+
+    monkeypatch.setattr(scene, "jupyter_backend", lambda: "server")
+    monkeypatch.setattr(scene.SkeletonScene, "widget", lambda self: widgets.HTML())
+
+
+def test_full_body_ik_opens_on_the_captured_pose_with_its_targets(sample_motion,
+                                                                  draggable_views):
+    fb = controls.full_body_ik(sample_motion, 10)
+    try:
+        assert fb.handle is not None
+        name = fb.sliders["edit"].value
+        j = fb.skeleton.index(name)
+        # the sliders say where the edited effector is (relative to the root), not 0/0/0
+        sliders = [fb.sliders[c].value for c in "xyz"]
+        np.testing.assert_allclose(sliders, fb.positions[j] - fb.root_position,
+                                   atol=fb.sliders["x"].step)
+        # nothing was pulled: the IK pose is the captured one, the handle on the effector
+        np.testing.assert_allclose(fb.scene.skeleton("IK").positions, fb.positions, atol=1e-6)
+        np.testing.assert_allclose(fb.handle.GetCenter(), fb.positions[j], atol=1e-9)
+        fb._dragged(np.array(fb.handle.GetCenter()))  # a click that does not move it
+        np.testing.assert_allclose(fb.scene.skeleton("IK").positions, fb.positions, atol=1e-6)
+    finally:
+        fb.close()
+
+
+def test_ik_playground_handle_starts_on_the_target_and_a_click_moves_nothing(draggable_views):
+    from course.skeleton import chain
+
+    pg = controls.ik_playground(chain([1.0] * 5, axes=[0, 0, 1]), methods=["dls"])
+    try:
+        np.testing.assert_allclose(pg.handle.GetCenter(), pg.target, atol=1e-12)
+        before = pg.scene.skeleton("solution").positions
+        result = pg.result
+        pg._dragged(np.array(pg.handle.GetCenter()))
+        assert pg.result is result, "a callback without a move must not solve again"
+        np.testing.assert_allclose(pg.scene.skeleton("solution").positions, before)
+    finally:
+        pg.close()
+
+
+def test_ik_playground_opens_on_the_first_method_listed():
+    from course.skeleton import chain
+
+    leg = chain([1.0, 1.0], axes=[0, 0, 1])
+    pg = controls.ik_playground(leg, methods=["two_link", "ccd", "dls"])
+    try:
+        assert pg.sliders["method"].value == "two_link"
+        assert pg.readout.value.startswith("<b>two_link</b>"), pg.readout.value
+    finally:
+        pg.close()
+    with pytest.raises(ValueError, match="method"):
+        controls.ik_playground(leg, methods=["ccd"], method="dls")
+
+
+# -- stable layout: readouts and warnings have their room before they have their text ----------
+
+
+def test_the_lock_warning_has_reserved_room_and_the_panel_a_fixed_width():
+    ex = controls.rotation_explorer("XYZ", (30.0, 20.0, 10.0), degrees=True)
+    try:
+        box = ex.widget.children[0]
+        room = (ex.warning.layout.height, ex.readout.layout.height, box.layout.width)
+        assert ex.warning.value == "" and ex.warning.layout.height is not None
+        ex.sliders["angle1"].value = 90.0  # gimbal lock: the warning appears ...
+        assert ex.gimbal_lock and "Gimbal lock" in ex.warning.value
+        # ... in the room it had: nothing beside or below it moves
+        assert (ex.warning.layout.height, ex.readout.layout.height, box.layout.width) == room
+        assert ex.widget.layout.flex_flow == "row wrap", "views wrap instead of leaving"
+    finally:
+        ex.close()
+
+
+def test_a_long_joint_list_keeps_its_readout_and_reset_button_in_sight(sample_motion):
+    ex = controls.fk_explorer(sample_motion.skeleton)
+    try:
+        panel = ex.widget.children[0]
+        assert panel.children[:3] == (ex.reset_button, ex.readout, ex.accordion)
+        assert ex.reset_button.layout.min_height is not None  # never squashed to 0 px
+        assert ex.accordion.layout.overflow == "auto"  # the joints scroll, not the readout
+    finally:
+        ex.close()
+
+
+def test_ik_playground_frames_its_first_target_even_out_of_reach():
+    from course.skeleton import chain
+
+    arm = chain([1.0] * 6, axes=[0, 0, 1])
+    goal = np.array([-2.0, 5.5, 2.0])  # beyond the chain's reach of 6
+    pg = controls.ik_playground(arm, methods=["fabrik"], target=goal)
+    try:
+        w, h = pg.scene.plotter.window_size
+        points = np.vstack([pg.scene.skeleton("solution").positions, goal])
+        uv = pg.scene.project(points)
+        assert np.all((uv > 0) & (uv < [w, h])), uv
+    finally:
+        pg.close()

@@ -184,3 +184,98 @@ def test_the_target_handle_reports_where_it_is_dragged(scene):
     scene.move_target_handle([0.0, 170.0, 0.0])
     np.testing.assert_allclose(handle.GetCenter(), [0.0, 170.0, 0.0])
     handle.Off()
+
+
+# -- the view rendered in the browser (vtk.js): what it is sent ----------------------------------
+
+
+@pytest.fixture
+def browser_scene(monkeypatch):
+    """A scene built as for the client (vtk.js) view, without a trame server."""
+    from course.viz import scene
+
+    monkeypatch.setattr(scene, "jupyter_backend", lambda: "client")
+    s = SkeletonScene(window_size=(320, 240))
+    s.add_skeleton(PARENTS, POSE, name="a")
+    s.add_skeleton(PARENTS, POSE + [60, 0, 0], name="b")
+    yield s
+    s.close()
+
+
+def test_a_browser_view_gets_joints_as_a_mesh_that_follows_the_pose(browser_scene):
+    from vtkmodules.vtkRenderingCore import vtkPolyDataMapper
+
+    joints = browser_scene.skeleton("a").actors[1]
+    # vtk.js has no glyph mapper: the spheres are a plain mesh it can draw
+    assert type(joints.mapper) is vtkPolyDataMapper or joints.mapper.IsA("vtkPolyDataMapper")
+    assert not joints.mapper.IsA("vtkGlyph3DMapper")
+    moved = POSE + [0, 0, 30]
+    browser_scene.set_pose(moved, name="a")
+    joints.mapper.GetInputAlgorithm().Update()
+    mesh = joints.mapper.GetInput()
+    lo, hi = np.array(mesh.GetBounds()).reshape(3, 2).T
+    radius = 0.022 * browser_scene._scale
+    np.testing.assert_allclose(lo, moved.min(axis=0) - radius, atol=0.05 * radius)
+    np.testing.assert_allclose(hi, moved.max(axis=0) + radius, atol=0.05 * radius)
+    # the legend, which vtk.js would not draw, is HTML naming both skeletons in their colours
+    html = browser_scene._legend_html()
+    for name, color in browser_scene.legend_entries():
+        assert name in html and color in html
+
+
+def test_a_browser_view_is_sent_the_camera_only_when_it_moved(browser_scene):
+    class View:
+        pushes = 0
+
+        def push_camera(self):
+            View.pushes += 1
+
+    browser_scene._browser_views.append(View())
+    browser_scene.render()  # the framing made at build time reaches the browser once
+    assert View.pushes == 1
+    browser_scene.set_pose(POSE + 1.0, name="a")
+    assert View.pushes == 1, "a pose change must not resend the camera"
+    browser_scene.set_camera("follow", render=True)
+    browser_scene.set_pose(POSE + [5.0, 0, 0], name="a")  # the camera follows the root
+    assert View.pushes == 3
+
+
+def test_a_browser_view_publishes_changes_at_once_and_the_whole_scene_when_still():
+    import asyncio
+
+    from course.viz.scene import _send_changes_only
+
+    published, full = [], []
+
+    class Helper:
+        def scene(self, window, new_state, widgets, orientation_axis):
+            return {"window": window, "new": new_state}
+
+    class View:
+        _VtkLocalView__view = "window"
+        _helper = Helper()
+        _widgets: list = []
+
+        class server:  # noqa: N801 (trame's attribute name)
+            class protocol:  # noqa: N801
+                @staticmethod
+                def publish(topic, state):
+                    published.append((topic, state))
+
+        def update(self, **_kwargs):
+            full.append(1)
+
+    view = View()
+    assert _send_changes_only(view)
+
+    async def drag():
+        for _ in range(5):
+            view.update()
+            await asyncio.sleep(0.05)
+        assert not full, "the whole scene must wait until the view is still"
+        await asyncio.sleep(1.3)
+
+    asyncio.run(drag())
+    assert published == [("trame.vtk.delta", {"window": "window", "new": False})] * 5
+    assert full == [1]
+    assert not _send_changes_only(object()), "a view of another kind is left as it is"

@@ -35,6 +35,7 @@ _EXPORTS = {
         "ik_playground",
         "full_body_ik",
     ),
+    "cloth": ("ClothScene", "ClothSimulator", "cloth_simulator"),
 }
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 

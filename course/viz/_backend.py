@@ -1,18 +1,17 @@
-"""Where the pictures go: an interactive trame view in JupyterLab, PNG images without a display.
+"""Where the pictures go: a live 3D view in JupyterLab, PNG images without a browser.
 
 The choice is made for the student, never hard-coded in a notebook:
 
-- ``PYVISTA_JUPYTER_BACKEND`` wins when set (CI sets ``static`` so executed notebooks embed
-  images);
-- inside a Jupyter kernel with trame installed (``pyvista[jupyter]``): ``"trame"``, the
-  interactive view, rendered by VTK in the kernel and streamed to the browser;
-- anywhere else (scripts, tests): ``"static"`` images.
+- ``PYVISTA_JUPYTER_BACKEND`` wins when set: ``static`` (CI, so executed notebooks embed
+  images), ``client``, ``server`` or ``trame``;
+- inside a Jupyter kernel with trame installed (``pyvista[jupyter]``): ``"client"``, the
+  scene rendered in the browser by vtk.js; a slider step sends only the changed points;
+- in Google Colab (which cannot reach a port of the kernel) and outside a kernel (scripts,
+  tests): ``"static"`` images.
 
-On a remote JupyterHub the trame iframe reaches the kernel's trame server through
-``jupyter-server-proxy`` (installed with ``pyvista[jupyter]``); set
-``pyvista.global_theme.trame.server_proxy_enabled = True`` (and, if the hub uses a custom
-prefix, ``server_proxy_prefix``) before the first view, or export
-``PYVISTA_TRAME_SERVER_PROXY_PREFIX``.
+On a JupyterHub (``JUPYTERHUB_SERVICE_PREFIX`` set) the trame iframe reaches the kernel's
+trame server through ``jupyter-server-proxy`` (installed with ``pyvista[jupyter]``; pyvista
+turns the proxy on by itself there); without the proxy the view falls back to ``"static"``.
 """
 
 from __future__ import annotations
@@ -72,18 +71,32 @@ def in_jupyter_kernel() -> bool:
     return shell is not None and "IPKernelApp" in getattr(shell, "config", {})
 
 
+LIVE_BACKENDS = ("client", "server", "trame")
+
+
 def jupyter_backend() -> str:
-    """``"trame"`` (interactive) or ``"static"`` (PNG), chosen as described in the module doc."""
+    """``"client"`` (rendered in the browser), ``"server"``/``"trame"`` (rendered in the
+    kernel, streamed as images) or ``"static"`` (PNG), chosen as the module doc says."""
     env = os.environ.get("PYVISTA_JUPYTER_BACKEND", "").strip().lower()
     if env:
-        return "static" if env in ("static", "none") else env
-    if not in_jupyter_kernel():
+        if env in ("static", "none"):
+            return "static"
+        if env not in LIVE_BACKENDS:
+            raise ValueError(f"PYVISTA_JUPYTER_BACKEND must be static, {', '.join(LIVE_BACKENDS)}"
+                             f", got {env!r}")
+        return env
+    if not in_jupyter_kernel() or "google.colab" in sys.modules:
         return "static"
     try:
         import trame_pyvista  # noqa: F401
     except ImportError:
         return "static"
-    return "trame"
+    if os.environ.get("JUPYTERHUB_SERVICE_PREFIX"):
+        try:
+            import jupyter_server_proxy  # noqa: F401
+        except ImportError:  # the browser cannot reach the kernel's trame port
+            return "static"
+    return "client"
 
 
 def off_screen() -> bool:

@@ -15,13 +15,13 @@ from typing import Any
 
 import ipywidgets as widgets
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._typing import Array
 from ._backend import latest_on_gl_thread
 from .figures import ConvergenceFigure, GimbalFigure, JointAngleFigure, SlerpArcFigure
 from .scene import GHOST, FrameScene, SkeletonScene
 
-Array = NDArray[np.float64]
 
 def _slider_style(readout_format: str = ".0f") -> dict[str, Any]:
     """Common slider options (a fresh Layout each time: widgets must not share one)."""
@@ -45,12 +45,31 @@ def _set_sliders(sliders: dict[str, widgets.Widget], position: Array) -> None:
 
 def _side_by_side(*children: widgets.Widget) -> widgets.HBox:
     """A row of panels that keep their width (the sliders and their numbers stay readable)
-    beside views that shrink to fit a narrow notebook (see ``SkeletonScene.widget``)."""
+    beside views that shrink to fit a narrow notebook (see ``SkeletonScene.widget``); what
+    does not fit wraps to the next line instead of leaving the output."""
     for child in children:
         if child.layout.min_width is None:  # a panel: fixed
             child.layout.flex = "0 0 auto"
             child.layout.margin = "0 12px 0 0"
-    return widgets.HBox(list(children), layout=widgets.Layout(align_items="flex-start"))
+    return widgets.HBox(list(children), layout=widgets.Layout(
+        align_items="flex-start", flex_flow="row wrap", width="100%"))
+
+
+def _readout(lines: int, width: str | None = None) -> widgets.HTML:
+    """An HTML readout whose height is reserved for ``lines`` lines: a longer or shorter
+    text never moves the view or the controls below it (it scrolls instead). Without a
+    ``width`` it spans its panel."""
+    height = f"{1.75 * lines + 0.4:.2f}em"
+    return widgets.HTML(layout=widgets.Layout(height=height, min_height=height, width=width,
+                                              overflow="auto", flex="0 0 auto"))
+
+
+def _fixed(widget: widgets.Widget, height: str = "32px") -> widgets.Widget:
+    """A button or row that a panel of limited height never squashes."""
+    widget.layout.height = height
+    widget.layout.min_height = height
+    widget.layout.flex = "0 0 auto"
+    return widget
 
 
 def _on_value(widget: widgets.Widget, handler: Any) -> None:
@@ -116,12 +135,13 @@ class RotationExplorer(Control):
                                       description="order", layout=widgets.Layout(width="200px"))
         self.sliders = {f"angle{k}": _angle_slider(f"angle {k + 1}", v)
                         for k, v in enumerate(a_deg)}
-        self.readout = widgets.HTML()
-        self.warning = widgets.HTML()
+        self.readout = _readout(7)
+        self.warning = _readout(4)  # reserved: the lock warning never moves the views
         self.scene = FrameScene(1, window_size=(380, 340))
         self.gimbal = GimbalFigure(order, np.radians(a_deg))
         self.gimbal_image = widgets.Image(format="png", width=340)
-        controls = widgets.VBox([self.order, *self.sliders.values(), self.warning, self.readout])
+        controls = widgets.VBox([self.order, *self.sliders.values(), self.warning, self.readout],
+                                layout=widgets.Layout(width="350px"))
         self.widget = _side_by_side(controls, self.scene.widget(), self.gimbal_image)
         for w in (self.order, *self.sliders.values()):
             _on_value(w, self._changed)
@@ -190,7 +210,7 @@ class SlerpExplorer(Control):
             "t": widgets.FloatSlider(value=t, min=0.0, max=1.0, step=0.01, description="t",
                                      **_slider_style(".2f")),
         }
-        self.readout = widgets.HTML()
+        self.readout = _readout(6, "420px")
         self.scene = FrameScene(3, labels=["LERP", "NLERP", "SLERP"], window_size=(780, 330))
         self.q0, self.q1 = self._ends()
         self.arc = SlerpArcFigure(self.q0, self.q1, t=t)
@@ -305,9 +325,9 @@ class FKExplorer(Control):
             titles.append(skeleton.names[j])
         self.accordion = widgets.Accordion(children=groups, titles=tuple(titles),
                                            selected_index=0 if groups else None)
-        self.reset_button = widgets.Button(description="reset", icon="undo")
+        self.reset_button = _fixed(widgets.Button(description="reset", icon="undo"))
         self.reset_button.on_click(latest_on_gl_thread(lambda _b: self.reset()))
-        self.readout = widgets.HTML()
+        self.readout = _readout(3)
         self.positions, self.orientations = skeleton.forward_kinematics(
             self.local_rotations, self.root_position)
         # frame the whole reach (the pose can turn anywhere), not just this pose
@@ -315,9 +335,11 @@ class FKExplorer(Control):
         self.scene = SkeletonScene(window_size=(640, 520))
         self.scene.add_skeleton(skeleton.parents, self.positions, self.orientations,
                                 name="pose", axes=axes, frame_points=self.positions, reach=reach)
-        left = widgets.VBox([self.reset_button, self.accordion, self.readout],
-                            layout=widgets.Layout(width="400px", max_height="540px",
-                                                  overflow="auto"))
+        # the readout above the joint list, which scrolls: it stays in sight while posing
+        self.accordion.layout = widgets.Layout(max_height="400px", overflow="auto",
+                                               flex="0 1 auto")
+        left = widgets.VBox([self.reset_button, self.readout, self.accordion],
+                            layout=widgets.Layout(width="400px"))
         self.widget = _side_by_side(left, self.scene.widget())
         self._joint = next(iter(j for j, a in self.axes.items() if len(a)), 0)
         self._show_readout()
@@ -405,7 +427,7 @@ class BVHPlayer(Control):
         widgets.jslink((self.play, "value"), (self.sliders["frame"], "value"))
         widgets.link((self.sliders["loop"], "value"), (self.play, "repeat"))
         self._fps, self._display_fps = fps, display_fps
-        self.readout = widgets.HTML()
+        self.readout = _readout(1)
         self.scene = SkeletonScene(window_size=(720, 480), camera="iso")
         self.scene.add_skeleton(motion.skeleton.parents, self.positions[0], name=motion.name
                                 or "motion", frame_points=self.positions)
@@ -426,7 +448,8 @@ class BVHPlayer(Control):
         _on_value(self.sliders["camera"], lambda c: self.scene.set_camera(c["new"], render=True))
         self._set_speed()
         row = widgets.HBox([self.play, self.sliders["frame"], self.sliders["speed"],
-                            self.sliders["loop"], self.sliders["camera"]])
+                            self.sliders["loop"], self.sliders["camera"]],
+                           layout=widgets.Layout(flex_flow="row wrap"))
         self.widget = widgets.VBox([self.scene.widget(), row, self.readout,
                                     *([self.curves_image] if self.curves_image else [])])
         self.show_frame(0)
@@ -456,14 +479,11 @@ def bvh_player(motion: Any, *, camera: str = "follow",
 # -- inverse kinematics ------------------------------------------------------------------------
 
 
-IK_METHODS = ("ccd", "fabrik", "jacobian_transpose", "pseudo_inverse", "dls")
-
-
 def _ik_methods() -> tuple[str, ...]:
-    """The methods course.ik.solve offers (its METHODS when it lists them)."""
-    import course.ik
+    """The methods course.ik.solve offers: its registry, :mod:`course.ik.methods`."""
+    from course.ik.methods import METHODS
 
-    return tuple(getattr(course.ik, "METHODS", IK_METHODS))
+    return METHODS
 
 
 class IKPlayground(Control):
@@ -471,15 +491,20 @@ class IKPlayground(Control):
     recorded solve, and the residual and iteration count update live.
 
     The solve runs once per event with ``record=True``; replaying iterations only moves points.
+    ``methods`` are offered in the menu, which opens on ``method`` (default: the first listed,
+    the one the notebook teaches).
     """
 
     def __init__(self, skeleton: Any, methods: Sequence[str] | None = None, *,
                  end_effector: int | str | None = None, target: ArrayLike | None = None,
                  local_rotations: ArrayLike | None = None, root_position: ArrayLike | None = None,
-                 tol: float = 1e-4, max_iter: int = 100) -> None:
+                 method: str | None = None, tol: float = 1e-4, max_iter: int = 100) -> None:
         from course.rotations import quat_identity
 
         methods = tuple(methods or _ik_methods())
+        method = methods[0] if method is None else method  # the one the notebook teaches
+        if method not in methods:
+            raise ValueError(f"method must be one of {methods}, got {method!r}")
         self.skeleton = skeleton
         n = skeleton.n_joints
         self.effector = (n - 1 if end_effector is None else
@@ -499,8 +524,7 @@ class IKPlayground(Control):
                                       step=reach / 200, description=f"target {c}",
                                       **_slider_style(".2f"))
                for k, c in enumerate("xyz")},
-            "method": widgets.Dropdown(options=list(methods),
-                                       value="dls" if "dls" in methods else methods[0],
+            "method": widgets.Dropdown(options=list(methods), value=method,
                                        description="method", layout=widgets.Layout(width="260px")),
             "tol": widgets.FloatLogSlider(value=tol, base=10, min=-8, max=-1, step=0.5,
                                           description="tolerance",
@@ -510,10 +534,12 @@ class IKPlayground(Control):
             "iteration": widgets.IntSlider(value=0, min=0, max=0, description="iteration",
                                            **_slider_style("d")),
         }
-        self.readout = widgets.HTML()
+        self.readout = _readout(3, "360px")
         self.scene = SkeletonScene(window_size=(640, 500))
+        # framed: the chain's reach and the first target (which may lie beyond it)
         self.scene.add_skeleton(skeleton.parents, start_pos, name="start", color=GHOST,
-                                opacity=0.55, frame_points=start_pos, reach=reach)
+                                opacity=0.55, frame_points=np.vstack([start_pos, goal]),
+                                reach=reach)
         self.scene.add_skeleton(skeleton.parents, start_pos, name="solution")
         self.scene.add_trail(capacity=512)
         self.convergence = ConvergenceFigure()
@@ -522,7 +548,7 @@ class IKPlayground(Control):
         self._dragging = False
         # where the view takes the mouse (trame), the target is also a sphere to drag
         self.handle = (self.scene.add_target_handle(goal, self._dragged)
-                       if self.scene.backend != "static" else None)
+                       if self.scene.draggable else None)
         for name in ("x", "y", "z"):
             _on_value(self.sliders[name], lambda _c: self._slider_moved())
         for name in ("method", "tol", "max_iter"):
@@ -542,7 +568,10 @@ class IKPlayground(Control):
             self.solve()
 
     def _dragged(self, position: Array) -> None:
-        """The handle was dragged to ``position``: the sliders follow, then one solve."""
+        """The handle was dragged to ``position``: the sliders follow, then one solve (a
+        callback that did not move it, e.g. a click, changes nothing)."""
+        if np.allclose(position, self.target):
+            return
         self._dragging = True
         try:
             _set_sliders(self.sliders, position)
@@ -575,8 +604,8 @@ class IKPlayground(Control):
         finally:
             self._solving = False
         self.scene.set_trail(self.frames[:, self.effector])
+        self.show_iteration(it.value)  # the 3D view first: it is what the student drags
         self._plot_convergence()
-        self.show_iteration(it.value)
 
     def _plot_convergence(self) -> None:
         """Blit the new residual curve into the figure made once."""
@@ -624,8 +653,16 @@ class FullBodyIK(Control):
         leaves = [n for j, n in enumerate(names) if not sk.children(j)]
         effectors = list(effectors or [n for n in leaves if "Hand" in n or "Foot" in n][:2]
                          or leaves[:1])
+        # every target starts on its joint: the first picture is the captured pose
         self.targets = {e: self.positions[sk.index(e)].copy() for e in names}
+        start = self.targets[effectors[0]] - self.root_position
         height = float(np.ptp(self.positions[:, 1]))
+        # targets move within a box around the captured pose; the view frames that box, so
+        # no target and no pose pulled towards one leaves the picture
+        margin = 0.3 * height
+        box = np.stack([self.positions.min(axis=0) - margin, self.positions.max(axis=0) + margin])
+        box[0, 1] = self.positions[:, 1].min()  # not under the floor
+        lo, hi = box - self.root_position
         methods = _ik_methods()
         self.sliders = {
             "root": widgets.Dropdown(options=names, value=root or names[0], description="root"),
@@ -637,18 +674,20 @@ class FullBodyIK(Control):
             "method": widgets.Dropdown(options=list(methods),
                                        value=method or ("dls" if "dls" in methods else methods[0]),
                                        description="method"),
-            **{c: widgets.FloatSlider(min=-height, max=height, step=height / 200,
-                                      description=f"target {c}",
-                                      **_slider_style(".1f")) for c in "xyz"},
+            **{c: widgets.FloatSlider(value=start[k], min=lo[k], max=hi[k],
+                                      step=height / 200, description=f"target {c}",
+                                      **_slider_style(".1f")) for k, c in enumerate("xyz")},
         }
-        self.readout = widgets.HTML()
+        self.readout = _readout(4, "360px")
         self.scene = SkeletonScene(window_size=(640, 520))
+        corners = np.stack(np.meshgrid(*box.T, indexing="ij"), axis=-1).reshape(-1, 3)
         self.scene.add_skeleton(sk.parents, self.positions, name="captured", color=GHOST,
-                                opacity=0.6)
+                                opacity=0.6, frame_points=np.concatenate([self.positions,
+                                                                          corners]))
         self.scene.add_skeleton(sk.parents, self.positions, name="IK")
         self._editing = False
-        self.handle = (self.scene.add_target_handle(self.positions[0], self._dragged)
-                       if self.scene.backend != "static" else None)
+        self.handle = (self.scene.add_target_handle(self.targets[effectors[0]], self._dragged)
+                       if self.scene.draggable else None)
         _on_value(self.sliders["effectors"], lambda _c: self._effectors_changed())
         _on_value(self.sliders["edit"], lambda _c: self._load_target())
         for k in ("root", "method"):
@@ -692,7 +731,7 @@ class FullBodyIK(Control):
     def _dragged(self, position: Array) -> None:
         """The handle was dragged: the edited effector's target (and its sliders) follow."""
         name = self.sliders["edit"].value
-        if name is None:
+        if name is None or np.allclose(position, self.targets[name]):
             return
         self._editing = True
         try:

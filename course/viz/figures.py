@@ -18,9 +18,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import Array
 from ._backend import png_bytes
-
-Array = NDArray[np.float64]
 
 BONE = "#3d7dca"
 JOINT = "#ffb000"

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._typing import Array
 from ._backend import (
     _headless,
     configure_environment,
@@ -35,10 +36,8 @@ from ._backend import (
 configure_environment()
 
 import pyvista as pv  # noqa: E402  (after the environment is set: VTK reads it on import)
-from vtkmodules.vtkFiltersCore import vtkTubeFilter  # noqa: E402
+from vtkmodules.vtkFiltersCore import vtkGlyph3D, vtkTubeFilter  # noqa: E402
 from vtkmodules.vtkRenderingCore import vtkGlyph3DMapper, vtkPolyDataMapper  # noqa: E402
-
-Array = NDArray[np.float64]
 
 #: (bone colour, joint colour) per skeleton, in the order skeletons are added.
 PALETTE: tuple[tuple[str, str], ...] = (
@@ -96,8 +95,20 @@ def _tube_actor(lines: pv.PolyData, radius: float, sides: int = 18) -> tuple[pv.
     return actor, tube
 
 
-def _sphere_actor(points: pv.PolyData, radius: float) -> pv.Actor:
-    """Spheres at every point of ``points``, glyphed on the GPU (no per-event CPU glyphing)."""
+def _sphere_actor(points: pv.PolyData, radius: float, *, browser: bool = False) -> pv.Actor:
+    """Spheres at every point of ``points``: glyphed on the GPU where VTK renders; for a view
+    rendered in the browser (vtk.js knows no glyph mapper) as one small mesh, re-glyphed on
+    the CPU when the points move (a few hundred points per joint)."""
+    if browser:
+        glyphs = vtkGlyph3D()
+        glyphs.SetInputData(points)
+        glyphs.SetSourceData(pv.Sphere(radius=radius, theta_resolution=14, phi_resolution=10))
+        glyphs.ScalingOff()
+        glyphs.OrientOff()
+        mapper = vtkPolyDataMapper()
+        mapper.SetInputConnection(glyphs.GetOutputPort())
+        mapper.ScalarVisibilityOff()
+        return pv.Actor(mapper=mapper)
     mapper = vtkGlyph3DMapper()
     mapper.SetInputData(points)
     mapper.SetSourceData(pv.Sphere(radius=radius, theta_resolution=28, phi_resolution=20))
@@ -189,6 +200,10 @@ class SkeletonScene:
             raise ValueError(f"camera must be one of {CAMERA_PRESETS}, got {camera!r}")
         self.backend = jupyter_backend()
         self.plotter = _new_plotter(window_size)
+        self._in_browser = self.backend == "client"
+        self._browser_views: list[Any] = []  # the vtk.js views showing this scene
+        self._camera_moved = False
+        self._legend: Any = None  # an HTML legend above a view rendered in the browser
         self.skeletons: dict[str, SkeletonActors] = {}
         self._ground_wanted = ground
         self._ground_actor: pv.Actor | None = None
@@ -259,7 +274,7 @@ class SkeletonScene:
         bones.SetPoints(points.GetPoints())  # the same vtkPoints: one write moves both
         edges = np.column_stack([par[1:], np.arange(1, n)])
         bones.lines = _segments(edges)
-        joints_actor = _sphere_actor(points, radius=0.022 * s)
+        joints_actor = _sphere_actor(points, radius=0.022 * s, browser=self._in_browser)
         bones_actor, _ = _tube_actor(bones, radius=0.011 * s)
         _shade(joints_actor, joint_color, opacity=opacity)
         _shade(bones_actor, bone_color, specular=0.25, opacity=opacity)
@@ -328,8 +343,22 @@ class SkeletonScene:
             ambient=0.35, diffuse=0.7, specular=0.0, pickable=False, reset_camera=False,
         )
 
+    def legend_entries(self) -> list[tuple[str, str]]:
+        """(name, bone colour) of each skeleton, as the legend shows them."""
+        return [(s.name, s.bone_color) for s in self.skeletons.values()]
+
+    def _legend_html(self) -> str:
+        return "".join(
+            f"<span style='margin-right:14px;white-space:nowrap'><span style='display:inline-block;"
+            f"width:10px;height:10px;border-radius:5px;background:{color};margin-right:5px'>"
+            f"</span>{name}</span>" for name, color in self.legend_entries())
+
     def _update_legend(self) -> None:
         if len(self.skeletons) < 2:
+            return
+        if self._in_browser:  # vtk.js draws no 2D actors: the legend is HTML above the view
+            if self._legend is not None:
+                self._legend.value = self._legend_html()
             return
         self.plotter.remove_legend(render=False)
         self.plotter.add_legend(
@@ -400,7 +429,8 @@ class SkeletonScene:
             if self._targets is not None:
                 self.plotter.remove_actor(self._targets_actor, render=False)
             self._targets = pv.PolyData(t.copy())
-            self._targets_actor = _sphere_actor(self._targets, radius=0.035 * self._scale)
+            self._targets_actor = _sphere_actor(self._targets, radius=0.035 * self._scale,
+                                                browser=self._in_browser)
             _shade(self._targets_actor, TARGET_COLOR, opacity=0.45)
             self.plotter.add_actor(self._targets_actor, reset_camera=False, pickable=False)
         else:
@@ -408,6 +438,12 @@ class SkeletonScene:
             self._targets.Modified()
         if render:
             self.render()
+
+    @property
+    def draggable(self) -> bool:
+        """True when the view sends the mouse to the kernel (server-rendered trame), so a
+        target handle can be dragged; an image or a browser-rendered view cannot."""
+        return self.backend in ("trame", "server")
 
     def add_target_handle(self, position: ArrayLike, on_drag: Callable[[Array], None]) -> Any:
         """A sphere at ``position (3,)`` that the student drags with the mouse in an interactive
@@ -417,7 +453,7 @@ class SkeletonScene:
         self._handle = self.plotter.add_sphere_widget(
             lambda center: on_drag(np.asarray(center, dtype=np.float64)), center=tuple(p),
             radius=0.045 * self._scale, color=TARGET_COLOR, selected_color="#ff8a8e",
-            interaction_event="always",
+            interaction_event="always", test_callback=False,  # made where it is: no move
         )
         return self._handle
 
@@ -516,6 +552,7 @@ class SkeletonScene:
         self.plotter.renderer.camera_set = True  # else pyvista resets it at the first render
         self.plotter.renderer.ResetCameraClippingRange()
         self._camera = preset
+        self._camera_moved = True
         if render:
             self.render()
 
@@ -545,19 +582,25 @@ class SkeletonScene:
         camera.position = tuple(np.add(camera.position, delta))
         self.plotter.renderer.ResetCameraClippingRange()
         self._follow = (name, root.copy())
+        self._camera_moved = True
 
     # -- output ------------------------------------------------------------------------------
 
     def render(self) -> None:
         """Draw the current state (and push it to the notebook view, if one is shown)."""
-        self.plotter.renderer.ResetCameraClippingRange()
+        if not self._in_browser:  # vtk.js sets its own clipping range
+            self.plotter.renderer.ResetCameraClippingRange()
         self.plotter.render()
+        if self._camera_moved and self._browser_views:  # vtk.js keeps its camera otherwise
+            for view in self._browser_views:
+                view.push_camera()
+            self._camera_moved = False
         if self._widget is not None and self.backend == "static":
             self._widget.value = png_bytes(self.image())
 
     def image(self) -> NDArray[np.uint8]:
         """The rendered frame as an ``(H, W, 3)`` uint8 array (row 0 at the top)."""
-        return on_gl_thread(lambda: self.plotter.screenshot(None, return_img=True))
+        return on_gl_thread(self._capture, False)
 
     def screenshot(self, path: str | Path | None = None) -> NDArray[np.uint8]:
         """Render and return the frame ``(H, W, 3)``; also write it as PNG to ``path``
@@ -569,14 +612,19 @@ class SkeletonScene:
         return img
 
     def _capture(self, smooth: bool) -> NDArray[np.uint8]:
-        smooth = smooth and not self.plotter.render_window.GetMultiSamples()
-        if smooth:
-            self.plotter.enable_anti_aliasing("msaa")
-        self.plotter.render()
-        img = self.plotter.screenshot(None, return_img=True)
-        if smooth:
-            self.plotter.disable_anti_aliasing()
+        # a view rendered in the browser suppresses VTK's own rendering: lift that for a picture
+        suppressed, self.plotter.suppress_rendering = self.plotter.suppress_rendering, False
+        try:
+            smooth = smooth and not self.plotter.render_window.GetMultiSamples()
+            if smooth:
+                self.plotter.enable_anti_aliasing("msaa")
             self.plotter.render()
+            img = self.plotter.screenshot(None, return_img=True)
+            if smooth:
+                self.plotter.disable_anti_aliasing()
+                self.plotter.render()
+        finally:
+            self.plotter.suppress_rendering = suppressed
         return img
 
     def project(self, points: ArrayLike) -> Array:
@@ -606,6 +654,15 @@ class SkeletonScene:
                 self.render()
             else:
                 self._widget = on_gl_thread(self._trame_view)
+            self._widget.add_class("course-view")  # found by the browser tests
+            if self._in_browser and len(getattr(self, "skeletons", ())) > 1:
+                import ipywidgets as widgets
+
+                self._legend = widgets.HTML(self._legend_html(),
+                                            layout=widgets.Layout(height="22px"))
+                view = self._widget
+                self._widget = widgets.VBox([self._legend, view], layout=widgets.Layout(
+                    width=view.layout.width, min_width=view.layout.min_width, flex="0 1 auto"))
         return self._widget
 
     def _trame_view(self) -> Any:
@@ -614,11 +671,16 @@ class SkeletonScene:
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
             self.plotter.render()
+            # the toolbar collapsed to one button in the corner: it covers nothing
             view = self.plotter.show(
-                jupyter_backend=self.backend, return_viewer=True, auto_close=False
+                jupyter_backend=self.backend, return_viewer=True, auto_close=False,
+                jupyter_kwargs={"collapse_menu": True},
             )
         print("".join(line for line in out.getvalue().splitlines(keepends=True)
                       if not line.startswith("Using wasm_dir:")), end="")
+        for local_view in getattr(getattr(view, "viewer", None), "views", ()):
+            if _send_changes_only(local_view):
+                self._browser_views.append(local_view)
         # the iframe is as wide as its box (keeping its aspect): the window's width, narrower
         # when the notebook is, never nothing
         view.layout.width = f"{self.plotter.window_size[0]}px"
@@ -639,6 +701,50 @@ class SkeletonScene:
 
     def close(self) -> None:
         on_gl_thread(self.plotter.close)
+
+
+def _send_changes_only(view: Any) -> bool:
+    """Make a browser-rendered (vtk.js) view send only what changed on each render.
+
+    trame's ``VtkLocalView.update`` serializes the scene twice per render: the changes
+    (published at once) and the whole state (kept for a page that reloads), which the browser
+    then applies a second time. Here a render publishes the changes only; the whole state is
+    refreshed once the view has been still for a second. Views of another kind, or of a trame
+    version without these internals, are left as they are (returns False).
+    """
+    render_window = getattr(view, "_VtkLocalView__view", None)
+    helper = getattr(view, "_helper", None)
+    if render_window is None or helper is None or not hasattr(view, "_widgets"):
+        return False
+    import asyncio
+    import time
+
+    full_update = view.update
+    last = [0.0, False]  # time of the last change, whether a refresh is scheduled
+
+    def refresh() -> None:  # one timer per quiet second, not one per render
+        wait = last[0] + 1.0 - time.monotonic()
+        if wait > 0:
+            asyncio.get_event_loop().call_later(wait, refresh)
+            return
+        last[1] = False
+        full_update()
+
+    def update(widgets: Any = None, orientation_axis: int = 0, **_kwargs: Any) -> None:
+        protocol = view.server.protocol
+        if not protocol:
+            return
+        delta = helper.scene(render_window, new_state=False,
+                             widgets=view._widgets if widgets is None else widgets,
+                             orientation_axis=orientation_axis)
+        protocol.publish("trame.vtk.delta", delta)
+        last[0] = time.monotonic()
+        if not last[1]:
+            last[1] = True
+            asyncio.get_event_loop().call_later(1.0, refresh)
+
+    view.update = update
+    return True
 
 
 def show_skeletons(
@@ -676,7 +782,11 @@ class FrameScene:
         *,
         window_size: tuple[int, int] | None = None,
     ) -> None:
-        self.backend = jupyter_backend()
+        # the captions are VTK text, which vtk.js does not draw: rendered in the kernel
+        self.backend = "server" if jupyter_backend() == "client" else jupyter_backend()
+        self._in_browser = False
+        self._browser_views: list[Any] = []
+        self._camera_moved = False
         size = window_size or (max(420, 300 * n_frames), 380)
         self.plotter = _new_plotter(size)
         self.offsets = [np.array([2.6 * (i - (n_frames - 1) / 2), 0.0, 0.0])
@@ -704,7 +814,7 @@ class FrameScene:
         self.rotations = np.tile(np.eye(3), (n_frames, 1, 1))
         # frames 2.6 apart, arrows up to 1.15 long; the view angle is vertical, so a wide
         # window fits its width / aspect
-        radius = max(1.5, 1.3 * n_frames * size[1] / size[0])
+        radius = max(1.5, 1.5 * n_frames * size[1] / size[0])  # captions included
         direction = np.array([0.45, 0.35, 1.0]) / np.linalg.norm([0.45, 0.35, 1.0])
         camera = self.plotter.camera
         camera.view_angle = 30.0

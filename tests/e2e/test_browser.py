@@ -1,34 +1,26 @@
 """JupyterLab in headless Chromium: run the notebook, drag a slider, see the numbers and the
-3D view change, and the kernel stay alive: once with the static image view that CI executes,
-once with the interactive trame view a student gets by default. Screenshots go to
-test-artifacts/. Needs the Debian package `chromium`."""
+3D view change, and the kernel stay alive: with the static image view that CI executes, the
+browser-rendered (vtk.js) view a student gets by default, and the server-rendered trame view
+in which the IK target is a sphere to drag. Screenshots go to test-artifacts/. Needs the
+Debian package `chromium`."""
 
 from __future__ import annotations
 
 import os
 import shutil
-import socket
-import subprocess
-import sys
-import time
-import urllib.request
 from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
+from labkit import KERNEL_IDLE, REPO, RUN_ALL, TOKEN, chromium, lab_server, launch_browser
 
-REPO = Path(__file__).resolve().parents[2]
 NOTEBOOK = Path(__file__).with_name("e2e_views.ipynb")
 DRAG_NOTEBOOK = Path(__file__).with_name("e2e_drag.ipynb")
 ARTIFACTS = REPO / "test-artifacts"
-TOKEN = "course-e2e"
-KERNEL_IDLE = ("window.jupyterapp?.shell.currentWidget?.sessionContext?.session?.kernel"
-               "?.status === 'idle'")
-RUN_ALL = "() => { window.jupyterapp.commands.execute('notebook:run-all-cells'); }"  # no await
 
 
 def _chromium() -> str:
-    path = shutil.which("chromium") or shutil.which("chromium-browser")
+    path = chromium()
     if path is None:
         message = "chromium not found: apt-get install chromium (make e2e does it as root)"
         if os.environ.get("CI", "").lower() == "true":
@@ -37,55 +29,17 @@ def _chromium() -> str:
     return path
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-@pytest.fixture(scope="module", params=["static", "trame"])
+@pytest.fixture(scope="module", params=["static", "client"])
 def lab(request, tmp_path_factory):
-    """JupyterLab on a free localhost port, serving a copy of the notebook (never saved back),
-    with the 3D view as an image widget (``static``, what CI executes) or the interactive
-    ``trame`` view a student gets by default."""
+    """JupyterLab on a free localhost port, serving a copy of the notebooks (never saved back),
+    with the 3D view as an image widget (``static``, what CI executes), rendered in the
+    browser (``client``, a student's default) or in the kernel (``server``)."""
+    _chromium()
     root = tmp_path_factory.mktemp("lab")
     for notebook in (NOTEBOOK, DRAG_NOTEBOOK):
         shutil.copy(notebook, root / notebook.name)
-    port = _free_port()
-    env = {
-        **os.environ,
-        "PYVISTA_JUPYTER_BACKEND": request.param,
-        "VTK_DEFAULT_OPENGL_WINDOW": "vtkEGLRenderWindow",
-        "PYVISTA_OFF_SCREEN": "true",
-        "JUPYTERLAB_SETTINGS_DIR": str(root / ".settings"),
-        "JUPYTERLAB_WORKSPACES_DIR": str(root / ".workspaces"),
-        "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
-    }
-    cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}",
-           "--ServerApp.ip=127.0.0.1", f"--IdentityProvider.token={TOKEN}", "--allow-root",
-           f"--ServerApp.root_dir={root}", "--LabApp.expose_app_in_browser=True",
-           "--LabApp.news_url=", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate"]
-    log = open(root / "lab.log", "wb")  # noqa: SIM115 (closed below)
-    server = subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT)
-    base = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                urllib.request.urlopen(f"{base}/api/status?token={TOKEN}", timeout=2)
-                break
-            except OSError:
-                if server.poll() is not None or time.monotonic() > deadline:
-                    raise RuntimeError((root / "lab.log").read_text()[-3000:]) from None
-                time.sleep(0.3)
+    with lab_server(root, {"PYVISTA_JUPYTER_BACKEND": request.param}) as base:
         yield base, request.param
-    finally:
-        server.terminate()
-        try:
-            server.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            server.kill()
-        log.close()
 
 
 @contextmanager
@@ -96,10 +50,7 @@ def _notebook_page(base: str, notebook: Path, artifact: str):
 
     ARTIFACTS.mkdir(exist_ok=True)
     with sync_playwright() as p:
-        browser = p.chromium.launch(
-            executable_path=_chromium(),
-            args=["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking"],
-        )
+        browser = launch_browser(p)
         page = browser.new_page(viewport={"width": 1400, "height": 1000})
         try:
             page.goto(f"{base}/lab/tree/{notebook.name}?reset&token={TOKEN}")
@@ -158,7 +109,7 @@ def test_slider_moves_the_skeleton_in_jupyterlab(lab):
     assert image_after != image_before, "the 3D view did not change"
 
 
-@pytest.mark.parametrize("lab", ["trame"], indirect=True)
+@pytest.mark.parametrize("lab", ["server"], indirect=True)
 def test_dragging_the_target_sphere_solves_ik_again(lab):
     """In the interactive view the target is a sphere to drag: the sliders follow it."""
     base, _ = lab

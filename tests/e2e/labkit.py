@@ -1,0 +1,188 @@
+"""JupyterLab in headless Chromium, shared by the browser tests and `benchmarks/live_views.py`:
+one Lab server on a free localhost port, one browser, a page per notebook that runs all cells.
+
+Every page (and every frame in it, e.g. a trame view's iframe) records when a new picture
+reaches it, in ``window.__frames`` as absolute times in ms (``performance.timeOrigin +
+performance.now()``, comparable across frames): an ``<img>`` that finished loading (the
+static view, a server-rendered trame image) or a WebGL draw call in a new animation frame
+(a view rendered in the browser by vtk.js). Key presses on the page are recorded in
+``window.__keys`` the same way.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parents[2]
+TOKEN = "course-e2e"
+KERNEL_IDLE = ("window.jupyterapp?.shell.currentWidget?.sessionContext?.session?.kernel"
+               "?.status === 'idle'")
+RUN_ALL = "() => { window.jupyterapp.commands.execute('notebook:run-all-cells'); }"  # no await
+# the kernel is idle again and every code cell has run (an execution count), or one failed
+# (the kernel then skips the rest)
+ALL_RUN = ("() => { const w = window.jupyterapp?.shell.currentWidget;"
+           " if (!w?.content) return false;"
+           " const cells = w.content.widgets.filter(c => c.model.type === 'code');"
+           " const failed = cells.some(c => c.model.outputs.toJSON()"
+           ".some(o => o.output_type === 'error'));"
+           " return w.sessionContext.session?.kernel?.status === 'idle' && (failed ||"
+           " cells.every(c => c.model.executionCount !== null ||"
+           " !c.model.sharedModel.getSource().trim())); }")
+
+FRAME_PROBE = r"""
+(() => {
+  const now = () => performance.timeOrigin + performance.now();
+  window.__frames = [];
+  window.__keys = [];
+  document.addEventListener('keydown', () => window.__keys.push(now()), true);
+  // in the notebook itself only the 3D view's image counts (not a plot beside it)
+  const top = window === window.top;
+  document.addEventListener('load', (e) => {
+    const el = e.target;
+    // (views made before the class existed: the one wide image)
+    const view = el && el.tagName === 'IMG' && (!top || el.closest('.course-view') ||
+      (!document.querySelector('.course-view') && el.naturalWidth >= 600));
+    if (view) {
+      window.__frames.push(now());
+    }
+  }, true);
+  let tick = -1;
+  const mark = () => {  // one mark per animation frame that draws
+    const t = now();
+    if (t - tick > 4) { tick = t; window.__frames.push(t); }
+  };
+  const draw = window.CanvasRenderingContext2D?.prototype.drawImage;
+  if (draw && !top) {  // a server-rendered image painted on a canvas
+    CanvasRenderingContext2D.prototype.drawImage = function (...args) {
+      mark(); return draw.apply(this, args);
+    };
+  }
+  for (const proto of [window.WebGL2RenderingContext?.prototype,
+                       window.WebGLRenderingContext?.prototype]) {
+    if (!proto) continue;
+    for (const name of ['drawElements', 'drawArrays', 'drawElementsInstanced',
+                        'drawArraysInstanced']) {
+      const original = proto[name];
+      if (!original) continue;
+      proto[name] = function (...args) { mark(); return original.apply(this, args); };
+    }
+  }
+})();
+"""
+
+
+def chromium() -> str | None:
+    return shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextmanager
+def lab_server(root: Path, env: Mapping[str, str] | None = None) -> Iterator[str]:
+    """JupyterLab serving ``root`` on a free localhost port; yields its base URL."""
+    port = _free_port()
+    # no "would you like news?" toast over the notebook
+    notification = root / ".settings" / "@jupyterlab" / "apputils-extension"
+    notification.mkdir(parents=True, exist_ok=True)
+    (notification / "notification.jupyterlab-settings").write_text(
+        '{"fetchNews": "false", "checkForUpdates": false}')
+    full_env = {
+        **os.environ,
+        "VTK_DEFAULT_OPENGL_WINDOW": "vtkEGLRenderWindow",
+        "PYVISTA_OFF_SCREEN": "true",
+        "JUPYTERLAB_SETTINGS_DIR": str(root / ".settings"),
+        "JUPYTERLAB_WORKSPACES_DIR": str(root / ".workspaces"),
+        "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
+        **(env or {}),
+    }
+    cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}",
+           "--ServerApp.ip=127.0.0.1", f"--IdentityProvider.token={TOKEN}", "--allow-root",
+           f"--ServerApp.root_dir={root}", "--LabApp.expose_app_in_browser=True",
+           "--LabApp.news_url=", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
+           "--ServerApp.disable_check_xsrf=True"]
+    log = open(root / "lab.log", "wb")  # noqa: SIM115 (closed below)
+    server = subprocess.Popen(cmd, env=full_env, stdout=log, stderr=subprocess.STDOUT)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 90
+        while True:
+            try:
+                urllib.request.urlopen(f"{base}/api/status?token={TOKEN}", timeout=2)
+                break
+            except OSError:
+                if server.poll() is not None or time.monotonic() > deadline:
+                    raise RuntimeError((root / "lab.log").read_text()[-3000:]) from None
+                time.sleep(0.3)
+        yield base
+    finally:
+        server.terminate()
+        try:
+            server.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            server.kill()
+        log.close()
+
+
+def launch_browser(playwright: Any) -> Any:
+    """Headless Chromium (Debian's package) with software WebGL for vtk.js views."""
+    return playwright.chromium.launch(
+        executable_path=chromium(),
+        args=["--headless", "--no-sandbox", "--disable-background-networking",
+              "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+              "--disable-renderer-backgrounding", "--disable-background-timer-throttling",
+              "--disable-backgrounding-occluded-windows"],
+    )
+
+
+def open_notebook(browser: Any, base: str, path: str, *, width: int = 1400,
+                  height: int = 1000, run_timeout_ms: int = 240_000) -> Any:
+    """A new page on the notebook ``path`` (relative to the Lab's root), all cells run and
+    the kernel idle again. The caller closes ``page.context``."""
+    context = browser.new_context(viewport={"width": width, "height": height})
+    context.add_init_script(FRAME_PROBE)
+    page = context.new_page()
+    try:
+        page.goto(f"{base}/lab/tree/{path}?reset&token={TOKEN}")
+        page.wait_for_function("window.jupyterapp && document.querySelector('.jp-Notebook')",
+                               timeout=90_000)
+        page.wait_for_function(KERNEL_IDLE, timeout=90_000)
+        page.evaluate(RUN_ALL)
+        page.wait_for_function(ALL_RUN, timeout=run_timeout_ms, polling=250)
+    except Exception:
+        context.close()
+        raise
+    return page
+
+
+def shutdown_kernel(page: Any) -> None:
+    """Stop the notebook's kernel (frees its memory and trame server for the next one)."""
+    page.evaluate("() => window.jupyterapp.shell.currentWidget?.sessionContext?.shutdown()")
+
+
+def kernel_alive(page: Any) -> bool:
+    return page.evaluate("() => " + KERNEL_IDLE.replace(" === 'idle'", " !== 'dead'"))
+
+
+def frames_after(page: Any, t0: float) -> list[float]:
+    """Frame times (ms) after ``t0`` recorded in the page and in all its frames."""
+    times: list[float] = []
+    for frame in page.frames:
+        try:
+            times += frame.evaluate("(t) => (window.__frames || []).filter(x => x > t)", t0)
+        except Exception:  # a frame that went away meanwhile
+            continue
+    return sorted(times)

@@ -1,0 +1,303 @@
+"""The gallery: every notebook and assignment notebook as a student sees it.
+
+Each notebook (found by glob, so new ones join by themselves) is opened in one live
+JupyterLab in headless Chromium with the default 3D view, all cells run, and for every
+interactive view (``.course-view``) at 1366x768 and again at 1920x1080:
+
+- the view and its controls lie inside the output area and inside the window's width,
+- no visible button has zero height,
+- the picture is not blank, and what is drawn in colour (the skeleton, its joints, the
+  target, the frames' arrows) keeps clear of the view's edges and spans at least a quarter
+  of its shorter side;
+
+then the first slider of the view is moved to both ends (Home, End) and all of it is checked
+again. Every screenshot goes into ``tests/e2e/artifacts/gallery.html``, one page to scan.
+Notebooks run a few at a time in one browser.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import html
+import io
+import os
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pytest
+from labkit import ALL_RUN, FRAME_PROBE, KERNEL_IDLE, REPO, RUN_ALL, TOKEN, chromium, lab_server
+
+ARTIFACTS = Path(__file__).resolve().parent / "artifacts"
+NOTEBOOKS = sorted(
+    [p.relative_to(REPO).as_posix() for p in (REPO / "notebooks").glob("[0-9]*.ipynb")]
+    + [p.relative_to(REPO).as_posix() for p in (REPO / "assignments").glob("*.ipynb")]
+)
+SIZES = ((1366, 768), (1920, 1080))
+PARALLEL = int(os.environ.get("GALLERY_PARALLEL", "3"))
+SETTLE_S = 2.0  # after a change: the kernel answers, the browser draws
+
+# Geometry of every view's output, from the DOM: the output area, the view, its controls.
+GEOMETRY = """(view) => {
+  const out = view.closest('.jp-OutputArea-output') || view.parentElement;
+  const box = (e) => { const r = e.getBoundingClientRect();
+    return {left: r.left, right: r.right, top: r.top, bottom: r.bottom,
+            width: r.width, height: r.height}; };
+  const shown = (e) => e.offsetParent !== null && getComputedStyle(e).visibility !== 'hidden';
+  const controls = [...out.querySelectorAll(
+      '.widget-slider, .widget-dropdown, .widget-button, button, .widget-play, .widget-html,'
+      + ' .widget-image, .widget-checkbox, .widget-select-multiple, .course-view')].filter(shown);
+  return {out: box(out), view: box(view), window: window.innerWidth,
+          controls: controls.map(e => ({cls: e.className.toString().slice(0, 60), ...box(e)})),
+          buttons: [...out.querySelectorAll('button')].filter(shown).map(box)};
+}"""
+
+
+@dataclass
+class Shot:
+    notebook: str
+    size: tuple[int, int]
+    view: int
+    state: str
+    png: str
+    problems: list[str] = field(default_factory=list)
+
+
+def _drawn_box(image: np.ndarray) -> tuple[int, int, int, int] | None:
+    """Bounding box (x0, y0, x1, y1) of what is drawn: saturated pixels (skeleton, joints,
+    targets, arrows) and dark ones (a grey "before" pose, captions), which the pale
+    background and floor never are. Left out: the magenta root path on the floor (a clip's
+    whole walk may run out of view) and the corner where a live view keeps its menu button."""
+    rgb = image[..., :3].astype(np.int16)
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    drawn = ((rgb.max(axis=-1) - rgb.min(axis=-1)) > 70) | (rgb.mean(axis=-1) < 150)
+    drawn &= ~((r > g + 60) & (b > g + 30) & (r > b))  # the trail, #d1347a, shaded
+    drawn[:70, :70] = False  # the collapsed toolbar button
+    ys, xs = np.nonzero(drawn)
+    if xs.size < 30:
+        return None
+    return int(xs.min()), int(ys.min()), int(xs.max()), int(ys.max())
+
+
+def _check_picture(png: bytes) -> list[str]:
+    from PIL import Image
+
+    image = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+    h, w = image.shape[:2]
+    if image.std() < 4:
+        return ["the picture is blank"]
+    box = _drawn_box(image)
+    if box is None:
+        return ["nothing drawn in colour (no skeleton)"]
+    x0, y0, x1, y1 = box
+    problems = []
+    margin = 2
+    if x0 < margin or y0 < margin or x1 > w - 1 - margin or y1 > h - 1 - margin:
+        problems.append(f"the drawing touches the view's edge (box {box} in {w}x{h})")
+    if max(x1 - x0, y1 - y0) < 0.25 * min(w, h):
+        problems.append(f"the drawing is small: {max(x1 - x0, y1 - y0)} px "
+                        f"< a quarter of {min(w, h)} px")
+    return problems
+
+
+def _check_geometry(g: dict) -> list[str]:
+    problems = []
+    out, tol = g["out"], 1.5
+    for c in g["controls"]:
+        if c["right"] > g["window"] + tol:
+            problems.append(f"{c['cls'] or 'a control'} ends at x={c['right']:.0f}, "
+                            f"past the window ({g['window']})")
+        elif c["left"] < out["left"] - tol or c["right"] > out["right"] + tol:
+            problems.append(f"{c['cls'] or 'a control'} [{c['left']:.0f}, {c['right']:.0f}] "
+                            f"leaves the output area [{out['left']:.0f}, {out['right']:.0f}]")
+    if any(b["height"] < 1 for b in g["buttons"]):
+        problems.append("a button has zero height")
+    v = g["view"]
+    if v["width"] < 50 or v["height"] < 50:
+        problems.append(f"the view is {v['width']:.0f}x{v['height']:.0f} px")
+    return problems
+
+
+async def _wait_settled(page, seconds: float = SETTLE_S) -> None:
+    await page.wait_for_function(KERNEL_IDLE, timeout=60_000)
+    await asyncio.sleep(seconds)
+
+
+async def _first_picture(view, timeout_s: float = 30.0) -> None:
+    """Wait until the view shows something (a live view draws a moment after its cell)."""
+    from PIL import Image
+
+    deadline = asyncio.get_running_loop().time() + timeout_s
+    while asyncio.get_running_loop().time() < deadline:
+        image = np.asarray(Image.open(io.BytesIO(await view.screenshot())).convert("RGB"))
+        if image.std() >= 4 and _drawn_box(image) is not None:
+            return
+        await asyncio.sleep(0.5)
+
+
+async def _shoot(page, view, shots: list[Shot], notebook: str, size, k: int,
+                 state: str) -> None:
+    await view.scroll_into_view_if_needed()
+    if state == "start":
+        await _first_picture(view)
+    output = view.locator("xpath=ancestor::div[contains(@class, 'jp-OutputArea-output')][1]")
+    name = f"{notebook.replace('/', '_').removesuffix('.ipynb')}_{size[0]}_v{k}_{state}.png"
+    await output.screenshot(path=str(ARTIFACTS / name))
+    problems = _check_geometry(await view.evaluate(GEOMETRY))
+    problems += _check_picture(await view.screenshot())
+    shots.append(Shot(notebook, size, k, state, name, problems))
+
+
+async def _slider_end(page, view, key: str) -> bool:
+    output = view.locator("xpath=ancestor::div[contains(@class, 'jp-OutputArea-output')][1]")
+    handles = output.locator(".widget-slider .noUi-handle")
+    if await handles.count() == 0:
+        return False
+    handle = handles.first
+    if not await handle.is_visible():
+        return False
+    await handle.focus()
+    await page.keyboard.press(key)
+    return True
+
+
+async def _gallery_of(browser, base: str, notebook: str) -> list[Shot]:
+    shots: list[Shot] = []
+    context = await browser.new_context(viewport=dict(zip(("width", "height"), SIZES[0],
+                                                          strict=True)))
+    await context.add_init_script(FRAME_PROBE)
+    page = await context.new_page()
+    try:
+        await page.goto(f"{base}/lab/tree/{notebook}?reset&token={TOKEN}")
+        for attempt in range(3):  # on a busy machine a kernel can miss its start: reload
+            try:
+                await page.wait_for_function(
+                    "window.jupyterapp && document.querySelector('.jp-Notebook')",
+                    timeout=120_000)
+                await page.wait_for_function(KERNEL_IDLE, timeout=120_000)
+                break
+            except Exception:
+                if attempt == 2:
+                    raise
+                await page.reload()
+        # one column for the notebook: no file browser beside it
+        await page.evaluate("() => window.jupyterapp.shell.collapseLeft?.()")
+        await page.evaluate(RUN_ALL)
+        await page.wait_for_function(ALL_RUN, timeout=300_000, polling=500)
+        await _wait_settled(page, 4.0)
+        tracebacks = await page.locator(".jp-OutputArea-output[data-mime-type="
+                                        "'application/vnd.jupyter.error']").all_inner_texts()
+        if tracebacks:
+            shots.append(Shot(notebook, SIZES[0], -1, "run", "", [
+                f"a cell failed: {tracebacks[0][-300:]}"]))
+        views = page.locator(".course-view")
+        n = await views.count()
+        for size in SIZES:
+            await page.set_viewport_size({"width": size[0], "height": size[1]})
+            await asyncio.sleep(1.0)
+            for k in range(n):
+                view = views.nth(k)
+                await _shoot(page, view, shots, notebook, size, k, "start")
+                if size != SIZES[0]:
+                    continue  # the slider's ends once, at the small size (where it is tight)
+                for key, state in (("Home", "min"), ("End", "max")):
+                    if not await _slider_end(page, view, key):
+                        break
+                    await _wait_settled(page)
+                    await _shoot(page, view, shots, notebook, size, k, state)
+                if await _slider_end(page, view, "Home"):  # back to a start for the big size
+                    await _wait_settled(page, 1.0)
+    except Exception as exc:  # recorded, so one notebook does not hide the others
+        name = f"{notebook.replace('/', '_').removesuffix('.ipynb')}_failure.png"
+        try:
+            await page.screenshot(path=str(ARTIFACTS / name), full_page=True)
+        except Exception:
+            name = ""
+        shots.append(Shot(notebook, SIZES[0], -1, "failure", name, [f"{type(exc).__name__}: {exc}"
+                                                                    [:400]]))
+    finally:
+        try:
+            await page.evaluate(
+                "() => window.jupyterapp.shell.currentWidget?.sessionContext?.shutdown()")
+        except Exception:
+            pass
+        await context.close()
+    return shots
+
+
+async def _run_all(base: str) -> dict[str, list[Shot]]:
+    from playwright.async_api import async_playwright
+
+    limit = asyncio.Semaphore(PARALLEL)
+    async with async_playwright() as p:
+        browser = await p.chromium.launch(
+            executable_path=chromium(),
+            args=["--headless", "--no-sandbox", "--disable-background-networking",
+                  "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                  "--disable-renderer-backgrounding", "--disable-background-timer-throttling",
+                  "--disable-backgrounding-occluded-windows"])
+
+        async def one(nb: str) -> list[Shot]:
+            async with limit:
+                return await _gallery_of(browser, base, nb)
+
+        results = await asyncio.gather(*(one(nb) for nb in NOTEBOOKS))
+        await browser.close()
+    return dict(zip(NOTEBOOKS, results, strict=True))
+
+
+def _write_gallery(results: dict[str, list[Shot]]) -> Path:
+    rows = []
+    for notebook, shots in results.items():
+        cells = []
+        for s in shots:
+            verdict = ("<span class=ok>ok</span>" if not s.problems else
+                       "<span class=bad>" + "<br>".join(html.escape(p) for p in s.problems)
+                       + "</span>")
+            image = f"<a href='{s.png}'><img src='{s.png}'></a>" if s.png else ""
+            cells.append(f"<figure>{image}<figcaption>{s.size[0]}&times;{s.size[1]} view "
+                         f"{s.view} {s.state}: {verdict}</figcaption></figure>")
+        if not shots:
+            cells.append("<p>no interactive view</p>")
+        rows.append(f"<section><h2>{html.escape(notebook)}</h2>{''.join(cells)}</section>")
+    page = ("<!doctype html><meta charset=utf-8><title>course-kinematics: the live views</title>"
+            "<style>body{font:14px sans-serif;margin:16px}section{margin-bottom:18px}"
+            "figure{display:inline-block;margin:4px;vertical-align:top;max-width:460px}"
+            "img{max-width:460px;max-height:300px;border:1px solid #ccd}"
+            ".ok{color:#1a7f37}.bad{color:#b42318;font-weight:bold}</style>"
+            "<h1>The live views, as a student sees them</h1>"
+            f"<p>{len(results)} notebooks, window sizes "
+            f"{', '.join(f'{w}x{h}' for w, h in SIZES)}; each view at its start and with its "
+            "first slider at both ends.</p>" + "".join(rows))
+    path = ARTIFACTS / "gallery.html"
+    path.write_text(page)
+    return path
+
+
+@pytest.fixture(scope="module")
+def gallery(tmp_path_factory):
+    if chromium() is None:
+        message = "chromium not found: apt-get install chromium (make e2e does it as root)"
+        if os.environ.get("CI", "").lower() == "true":
+            pytest.fail(message)
+        pytest.skip(message)
+    root = tmp_path_factory.mktemp("gallery")
+    for folder in ("notebooks", "assignments"):
+        shutil.copytree(REPO / folder, root / folder,
+                        ignore=shutil.ignore_patterns(".ipynb_checkpoints", "__pycache__"))
+    shutil.rmtree(ARTIFACTS, ignore_errors=True)
+    ARTIFACTS.mkdir(parents=True)
+    (ARTIFACTS / ".gitignore").write_text("*\n")
+    # the view a student gets: no backend forced (the Makefile's static is for nbval)
+    with lab_server(root, {"PYVISTA_JUPYTER_BACKEND": ""}) as base:
+        results = asyncio.run(_run_all(base))
+    _write_gallery(results)
+    return results
+
+
+@pytest.mark.parametrize("notebook", NOTEBOOKS)
+def test_every_view_is_framed_unclipped_and_drawn(gallery, notebook):
+    problems = [f"{s.size[0]}x{s.size[1]} view {s.view} ({s.state}): {p}"
+                for s in gallery[notebook] for p in s.problems]
+    assert not problems, "\n".join(problems) + f"\n(see {ARTIFACTS / 'gallery.html'})"
