@@ -1,0 +1,225 @@
+"""Check a notebook exercise with the autograder's engine, in the student's own kernel.
+
+An exercise is an autograder :class:`~autograder.spec.Function` (its parameters, reference
+and :class:`~autograder.checks.Check`), a generator of visible cases, its own known mistakes
+and two hints. A notebook's exercises form one :class:`~autograder.spec.Assignment`, so the
+expected answers come from :func:`autograder.runner.prepare`, each call is judged by
+:func:`autograder.runner.judge` and a failing exercise is diagnosed by
+:func:`autograder.runner.diagnose` against its own mistakes and the shared catalogue
+(:mod:`autograder.catalogue`). No sandbox: the code is the student's, run by the student.
+"""
+
+from __future__ import annotations
+
+import ast
+import copy
+import html
+import importlib
+import inspect
+import textwrap
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from functools import cache
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:  # the autograder loads on the first check, not with the notebook
+    from autograder.results import CaseResult
+    from autograder.spec import Assignment, Case, Function, Misconception
+
+_NOT_YET = "… {key}: not yet — write the body, then run this again"
+
+#: The notebooks with exercises, by number (``nb02.py`` for ``"02"``).
+NOTEBOOKS = ("01", "02", "03", "04", "05", "06", "07", "08")
+
+
+@dataclass(frozen=True)
+class Exercise:
+    """One exercise: ``key`` (``"fk_step"``; the notebook's number makes ``"02.fk_step"``),
+    the ``function`` the student writes (its ``reference`` is the solution), its visible
+    ``cases(rng)``, its known ``mistakes`` and two hints: a nudge, then the formula."""
+
+    key: str
+    function: Function
+    cases: Callable[[np.random.Generator], Sequence[Case]]
+    hint: str
+    formula: str
+    mistakes: tuple[Misconception, ...] = ()
+
+
+@dataclass(frozen=True)
+class Feedback:
+    """What :func:`check` found: ``status`` is ``"pass"``, ``"fail"`` or ``"not_yet"``;
+    ``text`` says it (shown as the cell's output, with a hint button unless it passed)."""
+
+    key: str
+    status: str
+    text: str
+
+    @property
+    def passed(self) -> bool:
+        return self.status == "pass"
+
+    def __repr__(self) -> str:
+        return self.text
+
+    def _repr_html_(self) -> str:
+        color = {"pass": "#1a7f45", "fail": "#b42318"}.get(self.status, "#555")
+        return (f"<pre style='white-space:pre-wrap;color:{color};margin:0'>"
+                f"{html.escape(self.text)}</pre>")
+
+    def _ipython_display_(self) -> None:
+        from IPython.display import display
+
+        from .hints import hint
+
+        display({"text/plain": self.text, "text/html": self._repr_html_()}, raw=True)
+        if not self.passed:
+            display(hint(self.key))
+
+
+def exercises(notebook: str) -> tuple[Exercise, ...]:
+    """The exercises of notebook ``notebook`` (``"02"``), in the order they appear."""
+    if notebook not in NOTEBOOKS:
+        raise KeyError(f"notebook {notebook!r} has no exercises; these do: {', '.join(NOTEBOOKS)}")
+    module = importlib.import_module(f"course.exercises.nb{notebook}")
+    found: tuple[Exercise, ...] = module.EXERCISES
+    return found
+
+
+def exercise(key: str) -> Exercise:
+    """The exercise ``key``, ``"<notebook>.<name>"`` (``"02.fk_step"``)."""
+    notebook, _, name = key.partition(".")
+    found = {e.key: e for e in exercises(notebook)}
+    if name not in found:
+        raise KeyError(f"no exercise {key!r}; notebook {notebook} has "
+                       f"{', '.join(f'{notebook}.{k}' for k in found)}")
+    return found[name]
+
+
+def reference(key: str) -> Callable[..., Any]:
+    """The reference solution of exercise ``key`` (a function of ``course``)."""
+    return exercise(key).function.reference
+
+
+@cache
+def _assignment(notebook: str) -> Assignment:
+    """A notebook's exercises as an assignment: one visible test per exercise."""
+    from autograder.catalogue import shared_misconceptions
+    from autograder.spec import Assignment, Test
+
+    found = exercises(notebook)
+    own = Assignment(
+        key=f"notebook {notebook}", title=f"notebook {notebook}'s exercises", template="",
+        functions=tuple(e.function for e in found),
+        tests=tuple(Test(e.key, e.function.name, 1.0, e.cases) for e in found),
+        misconceptions=tuple(m for e in found for m in e.mistakes))
+    return replace(own, shared=tuple(m for e in found
+                                     for m in shared_misconceptions(e.function)))
+
+
+def check(key: str, student: Callable[..., Any]) -> Feedback:
+    """Run the student's function on exercise ``key``'s visible cases and say how it did.
+
+    Parameters
+    ----------
+    key : str
+        ``"<notebook>.<name>"``, e.g. ``"02.fk_step"``.
+    student : callable
+        The function written in the exercise cell.
+
+    Returns
+    -------
+    Feedback
+        ``pass``; ``fail`` with the first failing case (its inputs, what came back and what
+        was expected) and the known mistake that explains every failure, if any; or
+        ``not_yet`` while the body is still ``...`` or raises ``NotImplementedError``.
+    """
+    from autograder.runner import diagnose, judge, prepare
+
+    ex = exercise(key)
+    if not callable(student):
+        return Feedback(key, "fail", f"✗ {key}: pass the function itself "
+                                     f"(got {type(student).__name__})")
+    if _unwritten(student):
+        return Feedback(key, "not_yet", _NOT_YET.format(key=key))
+    notebook = key.partition(".")[0]
+    assignment = _assignment(notebook)
+    prepared = next(p for p in prepare(assignment, None) if p.test.name == ex.key)
+    named = replace(ex.function, name=getattr(student, "__name__", ex.function.name))
+    results = [judge(named, case, expected, _call(student, case.args), None, _nowhere,
+                     assignment.misconceptions_of(ex.function.name))
+               for case, expected in zip(prepared.cases, prepared.expected, strict=True)]
+    if all(r.kind == "not_implemented" for r in results):
+        return Feedback(key, "not_yet", _NOT_YET.format(key=key))
+    failing = [r for r in results if not r.passed]
+    if not failing:
+        return Feedback(key, "pass", f"✓ {key}: all {len(results)} cases pass")
+    return Feedback(key, "fail", _failure_text(key, ex.function, results, failing[0],
+                                               diagnose(assignment, ex.function, results)))
+
+
+def _nowhere(line: int) -> str:
+    """Where an error happened, for :func:`~autograder.runner.judge`: the cell's line."""
+    return f"line {line}"
+
+
+def _where(exc: BaseException, student: Callable[..., Any]) -> dict[str, Any] | None:
+    """The last line of the student's own code that the error passed through, if any."""
+    import traceback
+
+    code = getattr(student, "__code__", None)
+    frames = [f for f in traceback.extract_tb(exc.__traceback__)
+              if code is not None and f.filename == code.co_filename]
+    return {"line": frames[-1].lineno, "code": frames[-1].line or ""} if frames else None
+
+
+def _call(student: Callable[..., Any], args: tuple[Any, ...]) -> Any:
+    """The call as the runner's :class:`~autograder.sandbox.Outcome`: the returned value
+    through the sandbox's own encoding (so it is validated the same way), or the error."""
+    from autograder.protocol import decode_value, encode_value
+    from autograder.sandbox import Outcome
+
+    try:
+        with np.errstate(all="ignore"):
+            out = student(*copy.deepcopy(args))  # a function that edits its input in place
+    except Exception as exc:  # the student's code: any error is feedback, not a crash
+        return Outcome("error", error={"type": type(exc).__name__, "message": str(exc)[:300],
+                                       "where": _where(exc, student)})
+    return Outcome("ok", value=decode_value(encode_value(out)))
+
+
+def _failure_text(key: str, fn: Function, results: list[CaseResult], first: CaseResult,
+                  mistake: Misconception | None) -> str:
+    from autograder.checks import show
+
+    n_pass = sum(r.passed for r in results)
+    inputs = "\n".join(f"    {name} = {show(a) if not isinstance(a, str) else repr(a)}"
+                       for name, a in zip(fn.params, first.case.args, strict=True))
+    lines = [f"✗ {key}: {n_pass} of {len(results)} cases pass",
+             f"  first failing case: {first.case.label}", inputs, f"  {first.reason}"]
+    if mistake is not None:
+        lines += [f"  This looks like {mistake.title}:",
+                  textwrap.fill(mistake.explanation, 92, initial_indent="    ",
+                                subsequent_indent="    ")]
+    return "\n".join(lines)
+
+
+def _unwritten(fn: Callable[..., Any]) -> bool:
+    """Whether ``fn``'s body is still only ``...`` / ``pass`` (and a docstring): "not yet".
+
+    Without its source (a built-in, a lambda typed at a console) it counts as written.
+    """
+    try:
+        tree = ast.parse(textwrap.dedent(inspect.getsource(fn)))
+    except (OSError, TypeError, SyntaxError):
+        return False
+    node = tree.body[0] if tree.body else None
+    if not isinstance(node, ast.FunctionDef):
+        return False
+    return all(isinstance(s, ast.Pass) or (isinstance(s, ast.Expr)
+                                           and isinstance(s.value, ast.Constant)
+                                           and (s.value.value is Ellipsis
+                                                or isinstance(s.value.value, str)))
+               for s in node.body)

@@ -1,0 +1,199 @@
+"""The notebooks' exercises (:mod:`course.exercises`): every one solvable by its reference,
+every known mistake caught and named, unattempted ones "not yet", and the notebooks' own
+exercise cells checked both ways (left as ``...``, and filled in with the reference)."""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import json
+import linecache
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from course.exercises import check, exercise, exercises, hint, quiz, reference
+from course.exercises.check import NOTEBOOKS
+
+REPO = Path(__file__).resolve().parents[1]
+ALL = [f"{nb}.{e.key}" for nb in NOTEBOOKS for e in exercises(nb)]
+CHECK_CALL = re.compile(r'check\("([\w.]+)",\s*(\w+)\)')
+
+
+@pytest.mark.parametrize("key", ALL)
+def test_every_exercise_is_solved_by_its_reference(key):
+    feedback = check(key, reference(key))
+    assert feedback.passed, feedback.text
+
+
+@pytest.mark.parametrize("key", ALL)
+def test_every_known_mistake_is_caught_and_named(key):
+    mistakes = [m for m in exercise(key).mistakes if m.wrong is not None]
+    for m in mistakes:
+        feedback = check(key, lambda *args, wrong=m.wrong: wrong(*args))
+        assert feedback.status == "fail", f"{m.key} passed {key}"
+        assert m.title in feedback.text, f"{key}: {m.key} not named:\n{feedback.text}"
+
+
+def test_shared_convention_mistakes_are_named():
+    """The autograder's catalogue names a scalar-last quaternion and a transposed matrix."""
+    xyzw = check("02.fk_orientation",
+                 lambda Q, R: np.roll(reference("02.fk_orientation")(Q, R), -1))
+    assert "(x, y, z, w)" in xyzw.text
+    transposed = check("01.compose", lambda a, b: (b @ a).T)
+    assert "transposed" in transposed.text
+    pivot = check("05.ccd_rotation", lambda r, e, t: reference("05.ccd_rotation")(0 * r, e, t))
+    assert "world origin" in pivot.text
+
+
+def test_a_failure_shows_the_case_its_inputs_and_expected_vs_got():
+    feedback = check("07.jacobian_column", lambda r, a, e: np.zeros(3))
+    lines = feedback.text.splitlines()
+    assert lines[0].startswith("✗ 07.jacobian_column: ")
+    assert any(line.strip().startswith("r_i = [") for line in lines)
+    assert "returned [0, 0, 0], expected" in feedback.text
+
+
+def _defined(source: str, name: str):
+    """Define ``name`` from ``source`` as a notebook cell would (its source findable)."""
+    filename = f"<cell {abs(hash(source))}>"
+    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
+    namespace: dict = {"np": np}
+    exec(compile(source, filename, "exec"), namespace)
+    return namespace[name]
+
+
+@pytest.mark.parametrize("body", ["...  # your code here", "pass",
+                                  '"""Docstring only."""', "raise NotImplementedError"])
+def test_an_unwritten_body_is_not_yet(body):
+    fn = _defined(f"def child_position(p_parent, Q_parent, l_i):\n    {body}\n", "child_position")
+    feedback = check("02.fk_step", fn)
+    assert feedback.status == "not_yet" and not feedback.passed
+
+
+def test_a_missing_return_and_an_error_are_failures():
+    no_return = _defined("def f(p, Q, l):\n    p + l\n", "f")
+    assert "forget a `return`" in check("02.fk_step", no_return).text
+    raising = _defined("def f(p, Q, l):\n    return p[7]\n", "f")
+    feedback = check("02.fk_step", raising)
+    assert feedback.status == "fail" and "raised IndexError" in feedback.text
+    assert "(line 2: return p[7])" in feedback.text, "the error names the student's line"
+
+
+def test_the_student_cannot_corrupt_the_cases():
+    def edits_in_place(p, Q, l_i):
+        p += 100.0
+        return p
+
+    check("02.fk_step", edits_in_place)
+    assert check("02.fk_step", reference("02.fk_step")).passed
+
+
+def test_unknown_keys_list_the_known_ones():
+    with pytest.raises(KeyError, match="02.fk_step"):
+        check("02.no_such", reference("02.fk_step"))
+    with pytest.raises(KeyError, match="no exercises"):
+        exercises("99")
+
+
+def test_hint_and_quiz_headless(capsys):
+    text = hint("04.inner_angle")
+    assert text.startswith("hint: ") and "formula: " in text and "<code>" not in text
+    assert quiz("05.first_sweep", "Which joint turns most?", ["the root", "the tip"],
+                answer="the tip", why="It goes first.") is None
+    out = capsys.readouterr().out
+    assert "Which joint turns most?" in out and "(b) the tip" in out and "goes first" not in out
+    with pytest.raises(ValueError):
+        quiz("05.bad", "?", ["one", "two"], answer=2, why="")
+
+
+def test_the_hint_button_reveals_a_hint_then_the_formula(monkeypatch):
+    import course.exercises.hints as hints
+
+    monkeypatch.setattr(hints, "in_kernel", lambda: True)
+    ex = exercise("07.dls_step")
+    button, shown = hints.hint("07.dls_step").children
+    assert shown.value == ""
+    button.click()
+    assert ex.hint in shown.value and ex.formula not in shown.value
+    button.click()
+    assert ex.formula in shown.value and button.disabled
+
+
+def test_the_quiz_reveals_its_answer_only_after_a_choice(monkeypatch):
+    quizzes = importlib.import_module("course.exercises.quiz")  # the module, not the function
+    monkeypatch.setattr(quizzes, "in_kernel", lambda: True)
+    _, choices, verdict = quizzes.quiz("05.first_sweep", "Which joint turns most?",
+                                       ["the root", "the tip"], answer=1,
+                                       why="It goes first.").children
+    assert verdict.value == ""
+    choices.value = 0
+    assert "Not this one" in verdict.value and "(b) the tip" in verdict.value
+    choices.value = 1
+    assert "Right" in verdict.value and "It goes first." in verdict.value
+
+
+def test_importing_the_exercises_is_light():
+    code = ("import sys, course.exercises; print(sorted(m for m in ('autograder', 'ipywidgets', "
+            "'matplotlib', 'pyvista') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=REPO)
+    assert out.stdout.strip() == "[]"
+
+
+# --- the notebooks' own exercise cells ----------------------------------------------------
+
+
+def _exercise_cells(path: Path) -> list[tuple[str, str, str]]:
+    """``(exercise cell source, key, function name)`` for each ``# ✏️ Exercise`` cell and
+    the check that follows it."""
+    cells = [("".join(c["source"]), c["cell_type"])
+             for c in json.loads(path.read_text(encoding="utf-8"))["cells"]]
+    found = []
+    for i, (src, kind) in enumerate(cells):
+        if kind == "code" and src.startswith("# ✏️ Exercise"):
+            follow = next(s for s, k in cells[i + 1:] if k == "code")
+            key, name = CHECK_CALL.search(follow).groups()
+            found.append((src, key, name))
+    return found
+
+
+def _solved(source: str, key: str, name: str) -> str:
+    """The cell with the body of ``name`` replaced by a call to the exercise's reference."""
+    fn = next(n for n in ast.parse(source).body if isinstance(n, ast.FunctionDef)
+              and n.name == name)
+    params = ", ".join(a.arg for a in fn.args.args)
+    call = f"return __import__('course.exercises').exercises.reference({key!r})({params})"
+    assert "...  # your code here" in source, f"{name}: no '...  # your code here' line"
+    return source.replace("...  # your code here", call)
+
+
+NOTEBOOK_PATHS = [p for nb in NOTEBOOKS for p in REPO.glob(f"notebooks/{nb}_*.ipynb")]
+
+
+@pytest.mark.parametrize("path", NOTEBOOK_PATHS, ids=lambda p: p.name)
+def test_notebook_exercises_unattempted_and_solved(path):
+    cells = _exercise_cells(path)
+    notebook = path.name[:2]
+    assert {key for _, key, _ in cells} == {f"{notebook}.{e.key}" for e in exercises(notebook)}, \
+        "every exercise of the notebook's module appears in it, once"
+    for source, key, name in cells:
+        assert check(key, _defined(source, name)).status == "not_yet", key
+        solved = check(key, _defined(_solved(source, key, name), name))
+        assert solved.passed, solved.text
+
+
+@pytest.mark.parametrize("path", sorted(REPO.glob("notebooks/0[0-8]_*.ipynb")),
+                         ids=lambda p: p.name)
+def test_notebook_quizzes_run_headless(path, capsys):
+    cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    quizzes = ["".join(c["source"]) for c in cells
+               if c["cell_type"] == "code" and 'quiz("' in "".join(c["source"])]
+    assert quizzes, f"{path.name} has no predict-then-run quiz"
+    for source in quizzes:
+        exec(source, {"quiz": quiz})
+        assert "🤔" in capsys.readouterr().out
