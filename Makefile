@@ -8,7 +8,7 @@ STAMP   := $(VENV)/.installed
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 TEST_ENV := PYVISTA_JUPYTER_BACKEND=static PYVISTA_OFF_SCREEN=true
 
-.PHONY: lab test e2e setup sysdeps lint clean
+.PHONY: lab test test-oldest e2e setup sysdeps lint clean
 
 # As root (a container, a cloud VM) Jupyter refuses to start without --allow-root.
 LAB_FLAGS := $(if $(filter 0,$(shell id -u 2>/dev/null)),--allow-root,)
@@ -16,8 +16,48 @@ LAB_FLAGS := $(if $(filter 0,$(shell id -u 2>/dev/null)),--allow-root,)
 lab: setup
 	$(VENV)/bin/jupyter lab $(LAB_FLAGS) notebooks/
 
+# One worker per core; loadscope keeps a notebook's cells (and a module's tests) on one worker.
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+
 test: setup
-	$(TEST_ENV) $(PY) -m pytest --nbval-lax --nbval-current-env --ignore=tests/e2e tests notebooks assignments
+	$(TEST_ENV) $(PY) -m pytest -n $(JOBS) --dist loadscope --nbval-lax --nbval-current-env \
+	  --ignore=tests/e2e tests notebooks assignments
+
+# The oldest supported Python (requires-python >=3.10) with the lower bounds of the core
+# dependencies (see the comment in pyproject.toml): the library's own tests, none that need
+# pyvista, matplotlib, Jupyter or ipywidgets, run from the source tree (PYTHONPATH=.) with no
+# install of the package. --confcutdir=tests keeps the root conftest.py (nbval's, it imports
+# nbformat) out. Skipped, and says why, where no Python 3.10 runs.
+OLDEST_VENV  ?= .venv-oldest
+OLDEST_PINS  := numpy==1.23.5 scipy==1.14.0 pooch==1.8.0 'pytest>=8.0' 'hypothesis>=6.100'
+OLDEST_TESTS := $(wildcard tests/test_rotations_*.py) tests/test_swing_twist.py \
+	tests/test_skeleton.py tests/test_fk.py tests/test_bvh.py tests/test_bvh_errors.py \
+	tests/test_motion.py tests/test_ik_geometry.py tests/test_ik_solvers.py \
+	tests/test_ik_robustness.py tests/test_retarget.py tests/test_keyframes.py \
+	tests/test_keyframes_motion.py tests/test_keyframes_rotations.py tests/test_mass_spring.py \
+	tests/test_robustness_library.py tests/test_robustness_io.py tests/test_data.py
+
+test-oldest:
+	@py=""; \
+	for c in python3.10 $$(pyenv root 2>/dev/null)/versions/3.10*/bin/python3.10 /usr/bin/python3.10; do \
+	  if "$$c" -c 'import sys; assert sys.version_info[:2] == (3, 10)' >/dev/null 2>&1; then py=$$c; break; fi; \
+	done; \
+	if [ -z "$$py" ]; then \
+	  echo "test-oldest: skipped: no Python 3.10 on this machine (the oldest that requires-python allows)"; \
+	  exit 0; \
+	fi; \
+	start=$$(date +%s); \
+	if [ ! -f $(OLDEST_VENV)/.installed ] || [ Makefile -nt $(OLDEST_VENV)/.installed ]; then \
+	  rm -rf $(OLDEST_VENV) && "$$py" -m venv $(OLDEST_VENV) && \
+	  $(OLDEST_VENV)/bin/python -m pip install --quiet $(OLDEST_PINS) > $(OLDEST_VENV)/install.log 2>&1 \
+	    || { cat $(OLDEST_VENV)/install.log; exit 1; }; \
+	  touch $(OLDEST_VENV)/.installed; \
+	fi; \
+	echo "test-oldest: $$($(OLDEST_VENV)/bin/python -c 'import sys, numpy, scipy, pooch; print("Python", sys.version.split()[0], "numpy", numpy.__version__, "scipy", scipy.__version__, "pooch", pooch.__version__)')"; \
+	status=0; PYTHONPATH=. $(OLDEST_VENV)/bin/python -m pytest -q -p no:cacheprovider --confcutdir=tests \
+	  $(OLDEST_TESTS) || status=$$?; \
+	echo "test-oldest: $$(( $$(date +%s) - start )) s, install included"; \
+	exit $$status
 
 # The browser test: JupyterLab in headless Chromium (Debian's package; never a downloaded build).
 e2e: setup
@@ -61,4 +101,4 @@ sysdeps:
 	fi
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis
+	rm -rf $(VENV) $(OLDEST_VENV) .pytest_cache .ruff_cache .mypy_cache .hypothesis
