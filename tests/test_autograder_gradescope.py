@@ -375,7 +375,7 @@ def test_the_schema_check_knows_every_documented_key():
 
 def test_student_text_cannot_become_markdown():
     assert markdown_text("[click](http://x) ![i](y) <b>*") == (
-        r"\[click\]\(http://x\) \!\[i\]\(y\) \<b\>\*")
+        r"\[click\](http://x) \!\[i\](y) \<b\>\*")
     block = code_block(["a ``` b", "````"])
     fence = block.split("text", 1)[0]
     assert fence == "`" * 5 and block.endswith("\n" + fence)

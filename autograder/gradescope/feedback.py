@@ -16,7 +16,9 @@ from ..spec import Misconception
 
 CONTACT = ("The grader itself failed on this submission: this is not a problem with your "
            "code. Please contact your instructor (and resubmit later).")
-MARKDOWN_SPECIALS = re.compile(r"([\\`*_{}\[\]<>()#+!|~-])")
+# Parentheses stay: they act only after a "]" (escaped here), and "\(" is an inline-math
+# delimiter where MathJax renders the page.
+MARKDOWN_SPECIALS = re.compile(r"([\\`*_{}\[\]<>#+!|~-])")
 
 
 def markdown_text(text: str) -> str:
