@@ -132,8 +132,10 @@ def main() -> None:
         n for n in names if not callable(getattr(module, n, None))]})
     while (request := protocol.read_frame(req)) is not None:
         fn, nonce = getattr(module, request["fn"]), request.pop("nonce")
+        most = request.get("most") or [None] * len(request["cases"])
         for i, args in enumerate(request["cases"]):
-            protocol.write_frame(res, {**_call(protocol, fn, args, i, config), "nonce": nonce})
+            protocol.write_frame(res, {**_call(protocol, fn, args, i, config, most[i]),
+                                       "nonce": nonce})
         protocol.write_frame(res, {"done": True, "nonce": nonce})
 
 
@@ -365,9 +367,9 @@ def make_hook(writable: str, readable: tuple[str, ...], hidden: tuple[str, ...],
 
 
 def _call(protocol: types.ModuleType, fn: Callable[..., object], args: list[Any], i: int,
-          config: dict[str, Any]) -> dict[str, Any]:
+          config: dict[str, Any], most: int | None) -> dict[str, Any]:
     try:
-        value = protocol.encode_value(fn(*protocol.decode_args(args)))
+        value = protocol.encode_value(fn(*protocol.decode_args(args)), most=most)
     except BaseException as exc:  # noqa: B036  (SystemExit, KeyboardInterrupt: the student's)
         return {"case": i, "ok": False, "error": _describe(exc, config)}
     return {"case": i, "ok": True, "value": value}

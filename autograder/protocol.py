@@ -109,8 +109,10 @@ def decode_args(args: list[Any]) -> list[Any]:
 # --- returned values (child -> grader) ------------------------------------------------------
 
 
-def encode_value(x: Any, depth: int = 0) -> dict[str, Any]:
-    """Describe what a student's function returned as plain JSON (runs in the child)."""
+def encode_value(x: Any, depth: int = 0, most: int | None = None) -> dict[str, Any]:
+    """Describe what a student's function returned as plain JSON (runs in the child). An
+    array of more than ``most`` numbers is only counted, ``{"kind": "oversized", "numbers":
+    n}``: encoding a million numbers the grader would not read costs the case's time."""
     if x is None:
         return {"kind": "none"}
     if isinstance(x, (str, np.str_)):
@@ -118,23 +120,25 @@ def encode_value(x: Any, depth: int = 0) -> dict[str, Any]:
     if isinstance(x, np.ndarray) and x.dtype.kind == "U" and x.ndim == 1 and len(x) <= 64:
         return {"kind": "seq", "type": "ndarray", "items": [encode_value(i) for i in x]}
     if isinstance(x, (np.ndarray, np.generic, int, float)):
-        return _encode_array(_asarray(x), type(x).__name__)
+        return _encode_array(_asarray(x), type(x).__name__, most)
     if isinstance(x, (list, tuple)):
         try:
             a = _asarray(x)
         except (ValueError, TypeError):
             a = None
         if a is not None and a.dtype.kind in "biuf":
-            return _encode_array(a, type(x).__name__)
+            return _encode_array(a, type(x).__name__, most)
         if depth < 3 and len(x) <= 64:
             return {"kind": "seq", "type": type(x).__name__,
-                    "items": [encode_value(i, depth + 1) for i in x]}
+                    "items": [encode_value(i, depth + 1, most) for i in x]}
     return {"kind": "other", "type": type(x).__name__}
 
 
-def _encode_array(a: np.ndarray, type_name: str) -> dict[str, Any]:
+def _encode_array(a: np.ndarray, type_name: str, most: int | None = None) -> dict[str, Any]:
     if a.dtype.kind not in "biuf":
         return {"kind": "other", "type": f"{type_name} of dtype {a.dtype}"}
+    if most is not None and a.size > most:
+        return {"kind": "oversized", "numbers": int(a.size)}
     if a.size > MAX_ITEMS:
         return {"kind": "other", "type": f"array of {a.size} numbers (too large)"}
     return {"kind": "array", "type": type_name, "dtype": "bool" if a.dtype.kind == "b" else
@@ -184,6 +188,8 @@ def decode_value(obj: Any, depth: int = 0) -> Value:
             return Value("none", "NoneType")
         if kind == "other":
             return Value("other", type_name or "object")
+        if kind == "oversized":  # counted, not sent (encode_value's ``most``)
+            return Value("other", f"array of {int(obj['numbers'])} numbers (too large)")
         if kind == "str":
             if not isinstance(obj["value"], str):
                 raise ProtocolError("bad string")

@@ -556,7 +556,7 @@ class Sandbox:
         nonce = secrets.token_hex(16)
         assert self.proc is not None and self.proc.stdin is not None
         try:
-            write_frame(self.proc.stdin.fileno(), {"fn": fn, "nonce": nonce,
+            write_frame(self.proc.stdin.fileno(), {"fn": fn, "nonce": nonce, "most": sizes,
                                                    "cases": [encode_args(a) for a in cases]})
         except OSError:
             return [self._fatal("crash", fn)]
@@ -569,12 +569,14 @@ class Sandbox:
                 return outcomes + [got]
             frame = got.value
             if isinstance(frame, dict) and set(frame) == {"oversized"}:
-                outcomes.append(Outcome("ok", value=Value(
-                    "other", f"answer of {frame['oversized']} bytes (far more numbers than "
-                             f"the {sizes[i]} that could make sense here)")))
+                outcomes.append(_too_many(f"{frame['oversized']} bytes", sizes[i]))
                 continue
             if not isinstance(frame, dict) or frame.get("nonce") != nonce or frame.get("case") != i:
                 return outcomes + [self._fatal("garbage", _forged(fn))]
+            counted = frame.get("value")
+            if isinstance(counted, dict) and counted.get("kind") == "oversized":
+                outcomes.append(_too_many(f"{counted.get('numbers')!s:.20} numbers", sizes[i]))
+                continue
             try:
                 outcomes.append(
                     Outcome("ok", value=_bounded(frame["value"], sizes[i]))
@@ -635,6 +637,11 @@ class Sandbox:
 
 
 MAX_NUMBERS = 1 << 20  # the most numbers any answer may hold, whatever it is expected to be
+
+
+def _too_many(what: str, limit: int) -> Outcome:
+    return Outcome("ok", value=Value("other", f"answer of {what} (far more numbers than the "
+                                              f"{limit} that could make sense here)"))
 
 
 def _bounded(obj: Any, limit: int) -> Value:

@@ -20,7 +20,13 @@ from autograder import Limits, check
 from autograder.checks import Check, QuatCheck, StringsCheck, TupleCheck
 from autograder.child import make_hook
 from autograder.cli import main
-from autograder.protocol import ProtocolError, decode_value, read_frame, write_frame
+from autograder.protocol import (
+    ProtocolError,
+    decode_value,
+    encode_value,
+    read_frame,
+    write_frame,
+)
 from autograder.report import describe_args
 from autograder.sandbox import INSIDE, SANDBOX_UID, Isolation, Replies, _crash_message, isolation
 from autograder.spec import Case, Function
@@ -353,6 +359,17 @@ def test_a_forged_frame_nested_too_deeply_is_refused(tmp_path):
         deep = {"kind": "seq", "items": [deep]}
     with pytest.raises(ProtocolError, match="nested too deeply"):
         decode_value(deep)
+
+
+def test_the_child_counts_an_answer_too_large_to_send():
+    """Beyond the case's bound an array is counted, not encoded (a million numbers would cost
+    the case's time), alone or inside a tuple; the grader reads it as an object."""
+    sent = encode_value((np.zeros(3), np.zeros(1 << 20)), most=80)
+    assert sent["items"][1] == {"kind": "oversized", "numbers": 1 << 20}
+    got = decode_value(sent)
+    assert got.items[0].array.shape == (3,) and got.items[1].kind == "other"
+    assert "1048576 numbers (too large)" in got.items[1].type_name
+    assert encode_value(np.zeros(80), most=80)["kind"] == "array"
 
 
 # --- messages ----------------------------------------------------------------------------------
