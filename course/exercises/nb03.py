@@ -1,14 +1,38 @@
-"""Notebook 03 · BVH: a joint's rotation channels to one quaternion."""
+"""Notebook 03 · BVH: the clip's timing from its header, and a joint's rotation channels to
+one quaternion."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from autograder.checks import QuatCheck
+from autograder.checks import Check, QuatCheck
 from autograder.spec import Case, Function, Misconception
 
-from ..rotations import quat_from_axis_angle, quat_from_euler, quat_mul
+from ..motion import Motion
+from ..rotations import quat_from_axis_angle, quat_from_euler, quat_identity, quat_mul
+from ..skeleton import chain
 from .check import Exercise
+
+
+def clip_timing(frame_time: float, n_frames: int) -> np.ndarray:
+    r"""Reference of 03.timing: a :class:`~course.motion.Motion` of ``n_frames`` frames,
+    ``frame_time`` apart, and its ``fps`` (:math:`1 / \Delta t`) and ``duration``
+    (:math:`F\,\Delta t`)."""
+    skeleton = chain([1.0])
+    motion = Motion(skeleton, np.tile(quat_identity(), (n_frames, skeleton.n_joints, 1)),
+                    np.zeros((n_frames, 3)), frame_time)
+    return np.array([motion.fps, motion.duration])
+
+
+def _timings(rng: np.random.Generator) -> list[Case]:
+    cases = [Case("the CMU walk's header: Frame Time .0083333, Frames 524", (0.0083333, 524)),
+             Case("a single frame at 120 fps", (0.0083333, 1)),
+             Case("a 30 fps clip of 90 frames", (0.0333333, 90))]
+    for k in (1, 2):
+        fps = int(rng.choice([24, 25, 50, 60, 100]))
+        cases.append(Case(f"a {fps} fps clip ({k})",
+                          (round(1 / fps, 7), int(rng.integers(20, 2000)))))
+    return cases
 
 
 def channel_rotation(angles_deg: np.ndarray, order: str) -> np.ndarray:
@@ -34,6 +58,29 @@ def _channels(rng: np.random.Generator) -> list[Case]:
 
 
 EXERCISES = (
+    Exercise(
+        "timing",
+        Function("clip_timing", ("frame_time", "n_frames"), clip_timing,
+                 Check((2,), atol=1e-3, noun="timing")),
+        _timings,
+        hint="The frame time is how long one frame lasts, in seconds. How many of them fit in "
+             "one second? And how long do all the frames of the clip last, one after another?",
+        formula="fps = 1 / frame_time; duration = n_frames · frame_time (seconds), as "
+                "<code>walk.fps</code> and <code>walk.duration</code>.",
+        mistakes=(
+            Misconception("last_frame_time", "clip_timing",
+                          "the time of the last frame as the duration",
+                          "Frame k starts at k · frame_time, so the last one starts at "
+                          "(n_frames − 1) · frame_time; it still lasts one frame time: the clip "
+                          "lasts n_frames · frame_time.",
+                          wrong=lambda dt, n: np.array([1 / dt, (n - 1) * dt])),
+            Misconception("divided_by_frame_time", "clip_timing",
+                          "the frame count divided by the frame time",
+                          "n_frames / frame_time has units of frames² per second; the duration "
+                          "is n_frames · frame_time = n_frames / fps.",
+                          wrong=lambda dt, n: np.array([1 / dt, n / dt])),
+        ),
+    ),
     Exercise(
         "channels",
         Function("channel_rotation", ("angles_deg", "order"), channel_rotation, QuatCheck()),

@@ -1,4 +1,5 @@
-"""Notebook 08 · the IK race: how far a joint turned between two frames."""
+"""Notebook 08 · the IK race: the statistics of the iteration counts, and how far a joint
+turned between two frames."""
 
 from __future__ import annotations
 
@@ -10,6 +11,20 @@ from autograder.spec import Case, Function, Misconception
 from ..rotations import quat_angle, quat_conjugate, quat_mul
 from ._cases import unit_quat
 from .check import Exercise
+
+
+def iteration_stats(iterations: np.ndarray) -> np.ndarray:
+    """Reference of 08.iteration_stats: the mean, the median and the 90th percentile (numpy's
+    default, linear interpolation) of the iteration counts."""
+    return np.array([np.mean(iterations), np.median(iterations), np.percentile(iterations, 90)])
+
+
+def _counts(rng: np.random.Generator) -> list[Case]:
+    tail = np.array([3, 4, 4, 5, 5, 6, 7, 9, 40, 310])
+    return [Case("ten targets, one far in the tail", (tail,)),
+            Case("an odd number of targets", (np.array([12, 2, 7, 3, 95]),)),
+            *(Case(f"60 random counts with a long tail ({k})",
+                   (np.ceil(rng.lognormal(2.0, 1.2, 60)).astype(int),)) for k in (1, 2))]
 
 
 def frame_turn(q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
@@ -33,6 +48,37 @@ def _frames(rng: np.random.Generator) -> list[Case]:
 
 
 EXERCISES = (
+    Exercise(
+        "iteration_stats",
+        Function("iteration_stats", ("iterations",), iteration_stats,
+                 Check((3,), noun="statistics")),
+        _counts,
+        hint="The mean is pulled up by a few slow targets; the median is the middle of the "
+             "sorted counts; the 90th percentile is the count that 90 % of the targets do not "
+             "exceed. numpy has a function for each — mind what the percentile function wants.",
+        formula="(<code>np.mean(iterations)</code>, <code>np.median(iterations)</code>, "
+                "<code>np.percentile(iterations, 90)</code>): the percentile in percent, 90.",
+        mistakes=(
+            Misconception("fraction_for_percent", "iteration_stats",
+                          "the percentile given as a fraction",
+                          "np.percentile takes percent: np.percentile(x, 90); with 0.9 it "
+                          "returns the 0.9th percentile, nearly the fastest target "
+                          "(np.quantile is the one that takes 0.9).",
+                          wrong=lambda its: np.array([np.mean(its), np.median(its),
+                                                      np.percentile(its, 0.9)])),
+            Misconception("mean_for_median", "iteration_stats", "the mean as the median",
+                          "The median is the middle of the sorted counts (np.median); a long "
+                          "tail pulls the mean far above it.",
+                          wrong=lambda its: np.array([np.mean(its), np.mean(its),
+                                                      np.percentile(its, 90)])),
+            Misconception("worst_for_tail", "iteration_stats",
+                          "the worst case as the 90th percentile",
+                          "The 90th percentile is the count 90 % of the targets stay within "
+                          "(np.percentile(x, 90)); the worst case, np.max, is a single target.",
+                          wrong=lambda its: np.array([np.mean(its), np.median(its),
+                                                      np.max(its)])),
+        ),
+    ),
     Exercise(
         "frame_turn",
         Function("frame_turn", ("q0", "q1"), frame_turn, Check(None, noun="angles")),
