@@ -31,7 +31,7 @@ if TYPE_CHECKING:  # the autograder loads on the first check, not with the noteb
 _NOT_YET = "… {key}: not yet — write the body, then run this again"
 
 #: The notebooks with exercises, by number (``nb02.py`` for ``"02"``).
-NOTEBOOKS = ("01", "02", "03", "04", "05", "06", "07", "08")
+NOTEBOOKS = ("01", "02", "03", "04", "05", "06", "07", "08", "09", "10", "11", "12")
 
 
 @dataclass(frozen=True)
