@@ -50,6 +50,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._typing import Array, BoolArray
+from .data.registry import CMU_CM_PER_UNIT
 from .motion import Motion, default_channels
 from .rotations import (
     quat_between,
@@ -61,9 +62,6 @@ from .rotations import (
     quat_rotate,
 )
 from .skeleton import Hinge, JointNotFoundError, Skeleton, Universal
-
-#: Centimetres per length unit of the CMU clips and the bundled ``wave`` (ASF units, 1/0.45 in).
-CMU_CM_PER_UNIT = 2.54 / 0.45
 
 # Bones shorter than this (in skeleton units) have no direction.
 _ZERO_BONE = 1e-9

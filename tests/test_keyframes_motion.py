@@ -63,7 +63,7 @@ def test_error_grows_with_k_and_smooth_schemes_beat_linear(walk):
 def test_joint_position_error_in_cm_of_a_known_shift(wave):
     moved = Motion(wave.skeleton, wave.local_rotations, wave.root_positions + [0.0, 0.0, 2.0],
                    wave.frame_time)
-    assert np.allclose(kf.joint_position_error(moved, wave), 2.0 * kf.CMU_UNIT_CM)
+    assert np.allclose(kf.joint_position_error(moved, wave), 2.0 * kf.CMU_CM_PER_UNIT)
     assert np.allclose(kf.joint_position_error(moved, wave, unit_cm=1.0), 2.0)
 
 

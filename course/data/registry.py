@@ -10,6 +10,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+#: Centimetres per length unit of the CMU clips and the bundled ``wave`` (ASF units: 1 unit =
+#: 1/0.45 inch = 5.644 cm).
+CMU_CM_PER_UNIT = 2.54 / 0.45
+
 CMU_ACKNOWLEDGMENT = (
     "The data used in this project was obtained from mocap.cs.cmu.edu. "
     "The database was created with funding from NSF EIA-0196217."

@@ -10,6 +10,7 @@ One module per step of the lecture:
 * :mod:`.blend`: aligning, cross-fading and concatenating two clips; foot sliding.
 """
 
+from ..data.registry import CMU_CM_PER_UNIT
 from .blend import aligned, concatenate, facing_yaw, foot_sliding, smoothstep
 from .curves import (
     KNOTS,
@@ -23,7 +24,7 @@ from .curves import (
     newton_coefficients,
     polynomial,
 )
-from .motion import CMU_UNIT_CM, joint_position_error, key_frames, keyframed
+from .motion import joint_position_error, key_frames, keyframed
 from .rotations import (
     angular_velocity,
     quat_exp,
@@ -35,7 +36,7 @@ from .rotations import (
 )
 
 __all__ = [
-    "CMU_UNIT_CM",
+    "CMU_CM_PER_UNIT",
     "KNOTS",
     "aligned",
     "angular_velocity",

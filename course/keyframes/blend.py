@@ -25,8 +25,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import rotations as rot
+from ..data.registry import CMU_CM_PER_UNIT
 from ..motion import Motion
-from .motion import CMU_UNIT_CM, _check_same_skeleton
+from .motion import _check_same_skeleton
 
 Array = NDArray[np.float64]
 
@@ -142,7 +143,7 @@ def concatenate(first: Motion, second: Motion, blend_frames: int = 0) -> Motion:
 
 
 def foot_sliding(motion: Motion, feet: Sequence[str] = FEET, *,
-                 contact_height: float = CONTACT_HEIGHT, unit_cm: float = CMU_UNIT_CM) -> Array:
+                 contact_height: float = CONTACT_HEIGHT, unit_cm: float = CMU_CM_PER_UNIT) -> Array:
     r"""How far each foot slides over the ground per frame while in contact, in cm.
 
     A foot is in contact at a frame when its height is within ``contact_height`` of the

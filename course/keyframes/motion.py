@@ -15,14 +15,13 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from ..data.registry import CMU_CM_PER_UNIT
 from ..motion import Motion
 from .curves import catmull_rom, cubic, linear
 from .rotations import slerp_keys, squad
 
 Array = NDArray[np.float64]
 
-# The CMU clips are in ASF length units: 1 unit = 1/0.45 inch = 5.644 cm.
-CMU_UNIT_CM = 2.54 / 0.45
 
 POSITION_SCHEMES: dict[str, Callable[..., Array]] = {
     "linear": linear,
@@ -87,7 +86,7 @@ def keyframed(motion: Motion, every: int, *, positions: str = "catmull_rom",
 
 
 def joint_position_error(motion: Motion, reference: Motion, *,
-                         unit_cm: float = CMU_UNIT_CM) -> Array:
+                         unit_cm: float = CMU_CM_PER_UNIT) -> Array:
     r"""Per frame, the mean distance between the joints of two motions after forward
     kinematics, :math:`\frac1J\sum_j \lVert p_j(t) - p_j^{\mathrm{ref}}(t)\rVert`, in cm.
 
