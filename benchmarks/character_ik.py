@@ -5,8 +5,9 @@ Run:  .venv/bin/python benchmarks/character_ik.py [--frames 500] [--method dls] 
 The CMU walk (read from $COURSE_DATA_DIR or ../shared/data/bvh), its first ``--frames``
 frames, is solved with ``root="LeftFoot"`` (the foot stays where it is in frame 0, the hips
 move over it) and both hands reaching to moving targets around where they are in frame 0:
-the left hand circling in towards the body, the right hand drawn in and out (the targets of
-``tests/test_ik_character.py``). Figures printed, each the best of ``--repeats`` runs:
+the left hand circling in towards the body, the right hand drawn in and out
+(``course.ik.hand_targets``, as ``tests/test_ik_character.py``). Figures printed, each the
+best of ``--repeats`` runs:
 
 - warm: ``solve_motion`` as it is meant to run, each frame started from the previous
   frame's solution; frames per second of wall time and of CPU time (on a shared machine the
@@ -26,22 +27,10 @@ from pathlib import Path
 import numpy as np
 
 from course.bvh import load_bvh
-from course.ik import solve_motion
+from course.ik import hand_targets, solve_motion
 from course.motion import Motion
 
 REPO = Path(__file__).resolve().parents[1]
-
-
-def hand_targets(motion: Motion) -> dict[str, np.ndarray]:
-    """Per-frame targets (F, 3) for both hands around their frame-0 positions."""
-    sk = motion.skeleton
-    pos, _ = motion.forward_kinematics()
-    phase = np.linspace(0.0, 2 * np.pi, motion.n_frames)[:, None]
-    zero = np.zeros_like(phase)
-    circle = np.hstack([np.cos(phase) - 1, np.sin(phase), zero])
-    sway = np.hstack([1 - np.cos(phase), zero, zero])
-    return {"LeftHand": pos[0, sk.index("LeftHand")] + 2.0 * circle,
-            "RightHand": pos[0, sk.index("RightHand")] + 1.5 * sway}
 
 
 def run(motion: Motion, targets: dict, method: str, warm: bool,

@@ -13,16 +13,29 @@ chain, and every method runs on it. FABRIK is a ball-joint algorithm (it moves p
 hinges its backward pass turns each hinge by a least-squares fit, slower: see the FABRIK
 docstring), so its speed goal is measured on the same 7 bones with ball joints, its own case;
 CCD is shown on both. Run: ``.venv/bin/python benchmarks/ik.py``.
+
+``--reach`` prints only the tables of targets at and near full reach (issue 18, item 4): per
+method, reach fraction and joint model, how many of 40 seeded random chains converge within
+the default iteration budget, and their median iterations (``--engine tree``: on the general
+engine), first for the methods alone (``solve(..., reach_start=False)``, the state before
+the reach-aware start), then as ``solve`` runs them. Ball chains have 2-6 random bone vectors
+and a target in a random direction; hinge chains are planar (2-6 random bones in the xy
+plane, every hinge about z) with the target in their plane, where it is reachable. Every
+solve starts from the rest pose. ``two_link`` runs on the chains of two bones only (its count
+is over those). ``r`` counts the solves that started from the reach-aware start
+(``IKResult.start == "reach"``).
 """
 
 from __future__ import annotations
 
+import argparse
 import time
 import warnings
 
 import numpy as np
 
-from course.ik import fabrik_batch, solve
+from course.ik import METHODS, fabrik_batch, solve
+from course.ik.api import _solve
 from course.rotations import quat_from_axis_angle
 from course.skeleton import chain
 
@@ -45,6 +58,10 @@ ROWS = [
     ("fabrik", "ball", 80),
 ]
 SKELETONS = {"hinge": HINGE, "ball": BALL}
+# 0.9 is where the reach-aware start begins (course.ik._engine.reach.REACH_START: a target at
+# exactly 0.9 takes it or not by rounding), 0.85 shows the methods on their own.
+REACH_FRACTIONS = (1.0, 0.999, 0.99, 0.95, 0.9, 0.85)
+N_CHAINS = 40
 
 
 def targets(n: int, seed: int = 0) -> np.ndarray:
@@ -113,7 +130,61 @@ def time_batch(method: str, sk, ts: np.ndarray) -> tuple[float, float]:
     return best[0], best[1]
 
 
+def reach_problems(joints: str, fraction: float, seed: int = 18):
+    """``N_CHAINS`` seeded random chains (``joints`` "ball" or planar "hinge") and a target at
+    ``fraction`` of each one's full reach: (skeleton, target) pairs."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(N_CHAINS):
+        n = int(rng.integers(2, 7))
+        if joints == "ball":
+            bones = rng.normal(size=(n, 3))
+            u = rng.normal(size=3)
+            sk = chain(bones)
+        else:  # planar: bones and target in the xy plane, every hinge about z
+            bones = np.hstack([rng.normal(size=(n, 2)), np.zeros((n, 1))])
+            u = np.r_[rng.normal(size=2), 0.0]
+            sk = chain(bones, axes=[0, 0, 1])
+        out.append((sk, fraction * sk.bone_lengths.sum() * u / np.linalg.norm(u)))
+    return out
+
+
+def reach_table(engine: str = "auto", reach_start: bool = True) -> None:
+    """Converged count and median iterations at and near full reach (see the docstring)."""
+    print(f"targets at a fraction of full reach, {N_CHAINS} seeded random chains each, rest "
+          f"start, tol {TOL}, default budgets, engine {engine}, reach_start={reach_start}: "
+          f"converged (median iterations) and how many started from the reach-aware start (r)")
+    print(f"{'method':20s} {'joints':6s} " + " ".join(f"{f:>16g}" for f in REACH_FRACTIONS))
+    for method in METHODS:
+        for joints in ("ball", "hinge"):
+            cells = []
+            for fraction in REACH_FRACTIONS:
+                ok, its, seeded = 0, [], 0
+                for sk, t in reach_problems(joints, fraction):
+                    if method == "two_link" and sk.n_joints != 3:
+                        continue
+                    r = _solve(sk, np.tile([1.0, 0, 0, 0], (sk.n_joints, 1)), np.zeros(3),
+                               {"end_effector": t}, method=method, tol=TOL, engine=engine,
+                               reach_start=reach_start)
+                    ok += bool(r.converged)
+                    its.append(r.iterations)
+                    seeded += r.start == "reach"
+                cells.append(f"{ok:>2d}/{len(its):<2d} ({np.median(its):4.0f}) {seeded:2d}r")
+            print(f"{method:20s} {joints:6s} " + " ".join(f"{c:>16s}" for c in cells))
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--reach", action="store_true",
+                        help="only the table of targets at and near full reach")
+    parser.add_argument("--engine", choices=("auto", "tree"), default="auto",
+                        help="the engine of the reach table")
+    args = parser.parse_args()
+    if args.reach:
+        for reach_start in (False, True):  # the methods alone (before), then the default
+            reach_table(args.engine, reach_start)
+            print()
+        return
     ts = targets(N_TARGETS)
     ik_times, ik_ok = time_ikpy(ts)
     ikpy_ms = np.median(ik_times) * 1e3
@@ -166,7 +237,8 @@ def main() -> None:
     planar = arm.forward_kinematics(q)[0][:, -1]
     r = solve(arm, IDENT, np.zeros(3), {"end_effector": planar}, method="fabrik", tol=TOL)
     print(f"\nFABRIK with hinge constraints on a planar 7-hinge arm ({N_TARGETS} targets): "
-          f"success {r.converged.mean():.0%}, median iterations {np.median(r.iterations):.0f}")
+          f"success {r.converged.mean():.0%}, median iterations {np.median(r.iterations):.0f}\n")
+    reach_table(args.engine)
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from course.ik import SwingTwist, Target, solve
+from course.ik import SwingTwist, Target, hand_targets, solve
 from course.ik._engine.components import clamp_swing_twist as clamp_components
 from course.ik._engine.ops import ARRAYS, FLOATS
 from course.ik.api import _solve
@@ -311,26 +311,12 @@ def walk(shared_bvh_dir):
 
 
 # --------------------------------------------------------------------------- IK over a clip
-def _hand_targets(motion):
-    """Both hands reaching to moving targets around where they are in frame 0 (the body
-    stays over the planted foot; the clip starts with the arms straight out to the sides):
-    the left hand circling in towards the body, the right hand drawn in and out."""
-    sk = motion.skeleton
-    pos, _ = motion.forward_kinematics()
-    phase = np.linspace(0.0, 2 * np.pi, motion.n_frames)[:, None]
-    zero = np.zeros_like(phase)
-    circle = np.hstack([np.cos(phase) - 1, np.sin(phase), zero])
-    sway = np.hstack([1 - np.cos(phase), zero, zero])
-    return {"LeftHand": pos[0, sk.index("LeftHand")] + 2.0 * circle,
-            "RightHand": pos[0, sk.index("RightHand")] + 1.5 * sway}
-
-
 @pytest.fixture(scope="module")
 def planted(walk):
     """The whole walk solved with the left foot planted, DLS, warm-started."""
     from course.ik import solve_motion
 
-    return solve_motion(walk, _hand_targets(walk), method="dls", root="LeftFoot", tol=1e-3)
+    return solve_motion(walk, hand_targets(walk), method="dls", root="LeftFoot", tol=1e-3)
 
 
 def test_solve_motion_plants_the_foot_and_reaches(walk, planted):
@@ -341,7 +327,7 @@ def test_solve_motion_plants_the_foot_and_reaches(walk, planted):
     assert max(_orientation_error(ori[0, foot], o) for o in ori[:, foot]) < 1e-9
     np.testing.assert_allclose(pos[0, foot], walk.forward_kinematics()[0][0, foot], atol=1e-9)
     assert planted.converged.all(), np.unique(planted.reasons)
-    for name, t in _hand_targets(walk).items():
+    for name, t in hand_targets(walk).items():
         err = np.linalg.norm(pos[:, sk.index(name)] - t, axis=-1)
         np.testing.assert_allclose(err.max(), planted.residuals.max(), atol=1e-3)
         assert err.max() < 1e-3
@@ -360,7 +346,7 @@ def test_solve_motion_leaves_joints_off_the_path_untouched(walk, planted):
     from course.ik import solve_motion
 
     short = walk[:40]
-    hips = solve_motion(short, {"LeftHand": _hand_targets(short)["LeftHand"]}, method="ccd",
+    hips = solve_motion(short, {"LeftHand": hand_targets(short)["LeftHand"]}, method="ccd",
                         tol=1e-3)
     assert np.array_equal(hips.motion.root_positions, short.root_positions)
     untouched = [j for j in range(sk.n_joints) if j not in hips.joints]
@@ -395,7 +381,7 @@ def test_cold_frames_keep_the_foot_planted_too(walk):
     from course.ik import solve_motion
 
     short = walk[:30]
-    cold = solve_motion(short, _hand_targets(short), root="LeftFoot", tol=1e-3,
+    cold = solve_motion(short, hand_targets(short), root="LeftFoot", tol=1e-3,
                         warm_start=False)
     pos, _ = cold.motion.forward_kinematics()
     foot = walk.skeleton.index("LeftFoot")

@@ -383,8 +383,8 @@ def test_property_every_input_gets_an_honest_answer(problem):
     finite pose whose forward kinematics give the reported positions and residual, bones
     kept, hinges turning about their axes within their limits, ``converged`` exactly when
     the residual is within tol, a reason from the documented set (never 'max_iterations'
-    at 0 iterations), a target at full reach reached (or the stretched pose beyond it), and
-    the batch equal to single solves.
+    at 0 iterations), a target at or near full reach reached (or the stretched pose beyond
+    it), and the batch equal to single solves.
     """
     sk, start, targets, limits, method = problem
     tol = 1e-4
@@ -412,8 +412,9 @@ def test_property_every_input_gets_an_honest_answer(problem):
     free = all(isinstance(t, Ball) for t in sk.joint_types[:-1]) and not limits
     d = np.linalg.norm(targets, axis=1)
     far = sk.bone_lengths.sum()
-    if free:  # a free chain reaches a target within tol of its full reach, or stretches
-        assert np.all(r.converged[(d >= far - tol) & (d <= far)])
+    if free:  # a free chain reaches a target at or near its full reach, or stretches
+        inner = 2 * sk.bone_lengths.max() - far  # nearer than this it cannot fold
+        assert np.all(r.converged[(d >= 0.95 * far) & (d <= far) & (d > inner)])
         np.testing.assert_allclose(r.error[d > far], d[d > far] - far, rtol=1e-9, atol=1e-12)
     if len(targets) <= 3:
         for i, t in enumerate(targets):

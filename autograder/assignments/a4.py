@@ -214,7 +214,7 @@ def _solve_reference(parents, offsets, local_quats, root_position, fixed, effect
     skeleton = Skeleton(_names(parents), parents, offsets)
     tol = 0.1 * REACH_TOL * path_length(parents, offsets, fixed, effector)
     result = solve(skeleton, local_quats, root_position, {int(effector): target}, method=method,
-                   root=int(fixed), tol=tol, max_iter=int(iterations))
+                   root=int(fixed), tol=tol, max_iter=int(iterations), reach_start=False)
     return np.array(result.local_rotations)
 
 

@@ -1,7 +1,8 @@
 """Inverse kinematics: the lecture's solvers, one module per method, one entry point.
 
 :func:`solve` runs any method on any skeleton (any fixed joint, any effectors, batched),
-:func:`solve_motion` a target per frame over a clip (a new :class:`~course.motion.Motion`);
+:func:`solve_motion` a target per frame over a clip (a new :class:`~course.motion.Motion`;
+:func:`hand_targets` makes its demo targets for a CMU clip's hands);
 the modules also expose each method as a plain function the notebooks can show:
 :func:`two_link`, :func:`ccd_positions`, :func:`fabrik_positions` / :func:`fabrik_batch`,
 :func:`chain_jacobian`, :func:`finite_difference_jacobian` and the Jacobian steps.
@@ -23,7 +24,7 @@ from .jacobian import (
     transpose_step,
 )
 from .methods import DEFAULT_MAX_ITER, METHODS
-from .motion import MotionIK, solve_motion
+from .motion import MotionIK, hand_targets, solve_motion
 from .result import IKResult, SwingTwist, Target
 from .two_link import two_link
 
@@ -40,6 +41,7 @@ __all__ = [
     "fabrik_batch",
     "fabrik_positions",
     "finite_difference_jacobian",
+    "hand_targets",
     "pinv_step",
     "pinv_svd",
     "pinv_tall",

@@ -48,6 +48,7 @@ def solve(
     weights: Mapping[str | int, float] | None = None,
     limits: Mapping[str | int, Any] | None = None,
     record: bool = False,
+    reach_start: bool = True,
     **options: Any,
 ) -> IKResult:
     r"""Move a skeleton's joints so that the end effectors reach their targets.
@@ -64,7 +65,12 @@ def solve(
     method (no Jacobian column points along the line; FABRIK and CCD stay on it): the
     iterative methods first bend it by a small deterministic turn of each joint
     (:func:`course.ik._engine.tree.bend_increment`, 0.05 rad), so ``frames[0]`` and
-    ``residuals[0]`` are those of the bent start.
+    ``residuals[0]`` are those of the bent start. Near the stretched pose they all crawl
+    (the distance to the root changes with the square of the bend): a serial chain of ball
+    joints, or of hinges about one axis, whose target lies at 0.9 or more of its full reach
+    starts bent evenly to the target's distance and aimed at it
+    (:mod:`course.ik._engine.reach`), and says so in ``result.start`` (``reach_start=False``
+    leaves the method alone from the given pose).
 
     Parameters
     ----------
@@ -102,6 +108,11 @@ def solve(
         keep the solve from is reported ``reason="limits"`` (see :class:`IKResult`).
     record : bool
         Keep every iteration's pose in ``result.frames``.
+    reach_start : bool
+        Start a target at or near the full reach from the reach-aware start (above; the
+        default). False: every iterative method from the given pose alone, as the lecture's
+        loop runs it (near the reach it crawls, beyond it may end off the stretched pose):
+        to compare with a plain implementation.
     **options
         ``damping`` (DLS :math:`\lambda`, a length in [0, 1e50]), ``rcond`` (pseudo-inverse
         cutoff, in [0, 1)), ``max_step`` (largest joint step per Jacobian iteration, radians,
@@ -122,30 +133,32 @@ def solve(
         bones.
     """
     return _solve(skeleton, local_rotations, root_position, targets, method, root, tol,
-                  max_iter, weights, limits, record, engine="auto", **options)
+                  max_iter, weights, limits, record, reach_start, engine="auto", **options)
 
 
 def _solve(skeleton: Any, local_rotations: ArrayLike, root_position: ArrayLike,
            targets: Mapping[str | int, Any], method: str = "dls", root: str | int | None = None,
            tol: float = 1e-4, max_iter: int | None = None,
            weights: Mapping[str | int, float] | None = None,
-           limits: Mapping[str | int, Any] | None = None, record: bool = False, *,
-           engine: Engine = "auto", **options: Any) -> IKResult:
+           limits: Mapping[str | int, Any] | None = None, record: bool = False,
+           reach_start: bool = True, *, engine: Engine = "auto", **options: Any) -> IKResult:
     """:func:`solve` on the chosen ``engine`` (see :data:`Engine`)."""
     if engine not in ("auto", "chain", "tree"):
         raise ValueError(f"engine: expected 'auto', 'chain' or 'tree', got {engine!r}")
     req = _validate(skeleton, local_rotations, root_position, targets, method, root, tol,
-                    max_iter, weights, limits, record, options)
+                    max_iter, weights, limits, record, options, reach_start)
     return _run(req, engine)
 
 
 def _validate(skeleton: Any, local_rotations: ArrayLike, root_position: ArrayLike,
               targets: Any, method: str, root: str | int | None, tol: float,
               max_iter: int | None, weights: Mapping | None, limits: Mapping | None,
-              record: bool, options: dict[str, Any]) -> Request:
+              record: bool, options: dict[str, Any], reach_start: bool = True) -> Request:
     """Every argument of :func:`solve` checked (``ValueError`` naming the first bad one), as
     the :class:`Request` the engines run."""
     spec = _method(method)
+    if not isinstance(reach_start, bool | np.bool_):
+        raise ValueError(f"reach_start: expected True or False, got {reach_start!r}")
     options = _options(spec, options)
     max_iter = _tol_and_max_iter(spec, tol, max_iter)
     _check_skeleton(skeleton)
@@ -168,7 +181,7 @@ def _validate(skeleton: Any, local_rotations: ArrayLike, root_position: ArrayLik
                    col_weight=col_weight, pos_weight=pos_w, rot_weight=rot_w,
                    limits=joint_limits,
                    limited=bool(limits), tol=tol, max_iter=max_iter, record=record,
-                   options=options)
+                   options=options, reach_start=bool(reach_start))
 
 
 def _run(req: Request, engine: Engine) -> IKResult:
@@ -345,6 +358,8 @@ def _result(solved: Solved, method: str) -> IKResult:
         residuals=np.array(history.residuals),
         reason=history.reasons(solved.unreachable),
         method=method,
+        start=(np.where(solved.reach_start, "reach", "") if np.ndim(solved.reach_start)
+               else "reach" if solved.reach_start else ""),
         frames=None if solved.frames is None else [{"positions": p, "local_rotations": q}
                                                    for q, p in solved.frames],
     )
@@ -360,6 +375,7 @@ def _stack(results: list[IKResult]) -> IKResult:
             positions=one.positions[None], converged=np.array([one.converged]),
             iterations=np.array([one.iterations]), residuals=one.residuals[:, None],
             reason=np.array([one.reason], dtype="<U14"), method=one.method,
+            start=np.array([one.start], dtype="<U5"),
             frames=None if one.frames is None else [{k: v[None] for k, v in f.items()}
                                                     for f in one.frames])
     residuals = np.empty((max(len(r.residuals) for r in results), len(results)))
@@ -380,6 +396,7 @@ def _stack(results: list[IKResult]) -> IKResult:
         residuals=residuals,
         reason=np.array([r.reason for r in results], dtype="<U14"),
         method=results[0].method,
+        start=np.array([r.start for r in results], dtype="<U5"),
         frames=frames,
     )
 

@@ -85,9 +85,10 @@ def solve_motion(
         clip and the paths below them are solved.
     warm_start : bool
         Start each frame from the previous frame's solution on the solved paths (and, with
-        a planted ``root``, the previous root position and rotation); False: every frame
-        alone (cold) from the clip's own pose of that frame, moved rigidly so that a planted
-        ``root`` sits where it is in frame 0.
+        a planted ``root``, the previous root position and rotation), never from the
+        reach-aware start of :func:`course.ik.solve` (which would jump where the target
+        crosses 0.9 of the reach); False: every frame alone (cold) from the clip's own pose of
+        that frame, moved rigidly so that a planted ``root`` sits where it is in frame 0.
 
     Returns
     -------
@@ -126,7 +127,12 @@ def solve_motion(
             start[joints] = local[t - 1, joints]
             if moved_root:
                 start_root = root_pos[t - 1]
-        r = _run(_frame(req, t, start, start_root), "auto")
+        row = _frame(req, t, start, start_root)
+        # A warm frame goes on from the last answer: the reach-aware start would jump to its
+        # own bend wherever the target crosses 0.9 of the reach (measured: turns of 0.8-1.8
+        # rad in one frame of a 4-bone arm), and from the last answer DLS needs no help.
+        row.reach_start = req.reach_start and not (warm_start and t)
+        r = _run(row, "auto")
         local[t, joints] = r.local_rotations[joints]
         if moved_root:
             root_pos[t] = r.root_position
@@ -138,6 +144,23 @@ def solve_motion(
                     source=motion.source)
     return MotionIK(solved, np.array(out["residuals"]), np.array(out["iterations"]),
                     np.array(out["converged"]), np.array(out["reasons"]), tuple(joints))
+
+
+def hand_targets(motion: Motion) -> dict[str, Array]:
+    """Per-frame targets (F, 3) for both hands of a CMU clip, around where they are in frame
+    0: the left hand circling in towards the body (radius 2), the right hand drawn in and out
+    (by up to 3), once over the clip. The clip starts with the arms straight out to the sides,
+    so with the body held over a planted foot every target is in reach: the test case and
+    benchmark of :func:`solve_motion` (``tests/test_ik_character.py``,
+    ``benchmarks/character_ik.py``)."""
+    sk = motion.skeleton
+    pos, _ = motion.forward_kinematics()
+    phase = np.linspace(0.0, 2 * np.pi, motion.n_frames)[:, None]
+    zero = np.zeros_like(phase)
+    circle = np.hstack([np.cos(phase) - 1, np.sin(phase), zero])
+    sway = np.hstack([1 - np.cos(phase), zero, zero])
+    return {"LeftHand": pos[0, sk.index("LeftHand")] + 2.0 * circle,
+            "RightHand": pos[0, sk.index("RightHand")] + 1.5 * sway}
 
 
 def _per_frame(targets: Any, F: int) -> dict[Any, Any]:

@@ -88,6 +88,15 @@ class IKResult:
         With ``record=True``: the pose before the first and after every iteration, each a
         dict with ``"positions"`` ``([B,] J, 3)`` and ``"local_rotations"`` ``([B,] J, 4)``.
     method : str
+    start : str or ndarray of str, shape (B,)
+        Where the iterations started: ``""`` from the given pose (projected into the limits;
+        a straight chain aimed along its own line bent a little first; always with
+        ``solve(..., reach_start=False)``), ``"reach"`` from the reach-aware start: a serial
+        chain of ball joints, or of hinges about one axis, whose target lies at 0.9 or more
+        of its full reach is first bent evenly in a plane so that its end reaches the
+        target's distance, aimed at it (stretched straight at or beyond the reach); near the
+        stretched pose every iterative method otherwise crawls. ``frames[0]`` and
+        ``residuals[0]`` are then that pose's.
     """
 
     local_rotations: Array
@@ -98,6 +107,7 @@ class IKResult:
     residuals: Array
     reason: str | NDArray[np.str_]
     method: str = ""
+    start: str | NDArray[np.str_] = ""
     frames: list[dict[str, Array]] | None = field(default=None, repr=False)
 
     @property

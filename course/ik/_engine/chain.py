@@ -40,6 +40,7 @@ from .components import (
     Scalar,
     Vec,
     add,
+    aim,
     cross,
     dot,
     limit,
@@ -53,6 +54,7 @@ from .components import (
     sub,
 )
 from .ops import FLOATS, Ops
+from .reach import REACH_START, reach_points
 from .small import TINY
 from .tree import bend_direction, bend_increment, outside_shell
 
@@ -152,25 +154,80 @@ class SerialChain:
             R = self.project(R, limits, ops)
         return (R, *self.forward(R, base, p0))
 
-    def stretch_if_far(self, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
-                       ops: Ops) -> list[Quat]:
-        """As :meth:`course.ik._engine.tree.Problem.stretch_if_far`, for a chain of free balls:
-        ``R`` stretched straight at a target at or beyond the reach (:func:`fit_chain`);
-        unchanged where the target is nearer or already reached."""
-        far = self.reach[0]
+    @cached_property
+    def bendable(self) -> bool:
+        """The reach-aware start applies (:mod:`~course.ik._engine.reach`): every bone turns
+        (nodes 0..n-2 are all variables), all of them ball joints or all hinges about one
+        axis (which then stays one world axis, :attr:`bend_reach` in the plane across it)."""
+        if self.variables != tuple(range(len(self.joints) - 1)):
+            return False
+        first = self.axes[0]
+        return self.free_balls or all(
+            a is not None and math.sqrt(dot(cross(a, first), cross(a, first))) < 1e-9
+            for a in self.axes)
+
+    @cached_property
+    def bend_reach(self) -> float:
+        """The reach the reach-aware start measures against: the sum of the bones, for
+        hinges of their parts across the common axis."""
+        if self.free_balls:
+            return self.reach[0]
+        a = self.axes[0]
+        return sum(math.sqrt(max(dot(b, b) - dot(b, a) ** 2, 0.0)) for b in self.bones[1:])
+
+    def reach_start(self, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
+                    limits: list[tuple], ops: Ops) -> tuple[list[Quat], Any, Any]:
+        """As :meth:`course.ik._engine.tree.Problem.reach_start` (the same points,
+        :func:`~course.ik._engine.reach.reach_points`): ``R`` put on the reach-aware start,
+        which problems took it, and which are done (stretched, no limits: the start is the
+        answer); ``R`` unchanged (and cheap to check) far from the reach. The caller checks
+        :attr:`bendable`."""
         to_t = sub(target, p0)
-        d = ops.sqrt(dot(to_t, to_t))
-        need = ops.both(d >= far - tol, d > 0.0)
-        if not ops.any(need):  # the usual case: the target well inside the reach
-            return R
-        Q, P = self.forward(R, base, p0)
-        need = ops.both(need, ops.dist(P[-1], target) >= tol)
-        u = scale(to_t, 1.0 / ops.where(need, d, 1.0))
-        straight, reach = [p0], 0.0
-        for bone in self.bones[1:]:
-            reach += math.sqrt(dot(bone, bone))
-            straight.append(add(p0, scale(u, reach)))
-        return ops.select(need, fit_chain(self, R, Q, P, base, straight, ops)[0], R)
+        d = ops.sqrt(dot(to_t, to_t))  # at least the in-plane distance
+        # A pre-test, a rounding below the line: reach_points decides, as on the tree engine.
+        near = d >= (REACH_START - 1e-9) * self.bend_reach
+        none = ops.both(near, False)
+        if not ops.any(near):  # the usual case: the target well inside the reach
+            return R, none, none
+        # A batch works on its problems near the reach alone (a large one has few).
+        rows = None if ops is FLOATS else np.flatnonzero(near)
+        Rn, bn, pn, tn = (R, base, p0, target) if rows is None else ops.take(
+            (R, base, p0, target), rows)
+        Q, P = self.forward(Rn, bn, pn)
+        B, n = np.size(P[0][0]), len(P)
+        normal = None if self.free_balls else ops.stack([quat_rotate(bn, self.axes[0])], B)
+        start = reach_points(ops.stack(P, B).reshape(B, n, 3), ops.stack([tn], B).reshape(B, 3),
+                             None if normal is None else normal.reshape(B, 3), tol)
+        if start is None:
+            return R, none, none
+        wanted, need, straight = start
+        W = ([tuple(w) for w in wanted[0].tolist()] if ops is FLOATS
+             else [tuple(np.ascontiguousarray(wanted[:, i].T)) for i in range(n)])
+        placed = ops.select(ops.flag(need), self.place(Rn, bn, pn, W, limits, ops), Rn)
+        done = ops.flag(straight & (not limits))
+        if rows is None:
+            return placed, ops.flag(need), done
+        return (ops.put(ops.copy(R), rows, placed), ops.put(none.copy(), rows, need),
+                ops.put(none.copy(), rows, done))
+
+    def place(self, R: list[Quat], base: Quat, p0: Vec, wanted: list[Vec], limits: list[tuple],
+              ops: Ops) -> list[Quat]:
+        """``R`` with every joint, root to tip, turned to point its bone at its ``wanted`` next
+        point (:func:`aim`: a ball by the shortest arc, a hinge about its axis) and projected
+        into its limit, as :meth:`course.ik._engine.tree.Problem.fit` places a chain (exact
+        where the points keep the bones and the hinges' planes). Needs every node a variable
+        (:attr:`bendable`)."""
+        R, q, p = list(R), base, p0
+        limits_of = {v: [lim for lim in limits if lim[0] == v] for v in self.variables}
+        for i, axis in enumerate(self.axes):
+            if i:
+                p = add(p, quat_rotate(q, self.bones[i]))
+            u = quat_rotate(quat_mul(q, R[i]), self.bones[i + 1])
+            R[i] = aim(R[i], q, axis, u, sub(wanted[i + 1], p), ops)
+            if limits_of[i]:
+                R = self.project(R, limits_of[i], ops)
+            q = quat_mul(q, R[i])
+        return R
 
     def unreachable(self, target: Vec, p0: Vec, ops: Ops) -> Any:
         """Whether the target lies outside the shell the effector can reach from ``p0``."""

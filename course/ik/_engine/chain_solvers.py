@@ -74,12 +74,13 @@ def solve_on_chain(req: Request, solver: Any, limits: list[tuple], weighted: boo
     R = start
     if limits:
         R = chain.project(R, limits, ops)
-    elif chain.free_balls:  # at or beyond the reach: the stretched pose (see stretch_if_far)
-        R = chain.stretch_if_far(R, base, p0, target, req.tol, ops)
+    reach_start = done = ops.full(target[0], False)
+    if req.reach_start and chain.bendable:  # near the reach: bent to its distance (reach.py)
+        R, reach_start, done = chain.reach_start(R, base, p0, target, req.tol, limits, ops)
     weights = {"inv_w2": tuple((1.0 / req.col_weight**2).tolist())} if weighted else {}
     R, P, history, frames = solver(chain, R, base, p0, target, req.tol, req.max_iter,
-                                   limits=limits, record=req.record, ops=ops, **weights,
-                                   **req.options)
+                                   limits=limits, record=req.record, ops=ops, done=done,
+                                   **weights, **req.options)
     covers = chain.joints == tuple(range(skeleton.n_joints))  # a chain skeleton: its own FK
 
     def pose(R: list, P: list | None = None) -> tuple[Array, Array]:
@@ -95,7 +96,8 @@ def solve_on_chain(req: Request, solver: Any, limits: list[tuple], weighted: boo
     local_out, positions = pose(R, P)
     recorded = [pose(f) for f in frames] if req.record else None
     unreachable = chain.unreachable(target, p0, ops)
-    return Solved(local_out, root_pos.copy(), positions, history, unreachable, recorded)
+    return Solved(local_out, root_pos.copy(), positions, history, unreachable, recorded,
+                  reach_start)
 
 
 def _components(a: Array, ops: Ops) -> tuple:
@@ -175,7 +177,7 @@ def _solve_sym(A: tuple, e: Vec, lam2: float, ops: Ops) -> Vec:
 def solve_jacobian(
     chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
     max_iter: int, *, method: str, inv_w2: np.ndarray, damping: float, rcond: float,
-    max_step: float, limits: list[tuple], record: bool, ops: Ops,
+    max_step: float, limits: list[tuple], record: bool, ops: Ops, done: Any = False,
 ) -> tuple[list[Quat], list[Vec], History, list[list[Quat]]]:
     """Iterate a Jacobian method, as :func:`.tree_solvers.solve_jacobian` does on the general
     model: capped steps (``max_step``), backtracking (a step that raises the error is
@@ -192,7 +194,7 @@ def solve_jacobian(
     R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
     e = sub(target, P[-1])
     err = ops.sqrt(dot(e, e))
-    history = History(err, tol, max_iter, ops=ops)
+    history = History(err, tol, max_iter, ops=ops, done=done)
     frames = [R] if record else []
     step_scale = 1.0
     while ops.any(history.active) and chain.variables:
@@ -295,8 +297,8 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Ops
                   ) -> tuple[list[Vec], Any, Any]:
     r"""FABRIK on chain points ``P`` (``P[0]`` fixed; bone lengths taken from them).
 
-    A target beyond the reach :math:`\sum d_i` is answered in one pass, the chain stretched
-    straight at it. A batch iterates only its problems still running. ``frames`` and
+    A target beyond :math:`\sum d_i - tol` (and not yet reached) is answered in one pass, the
+    chain stretched straight at it. A batch iterates only its problems still running. ``frames`` and
     ``errors``, if given, receive the points and the effector errors (copies, a float or
     (B,)) after every iteration.
 
@@ -309,8 +311,10 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Ops
     root = P[0]
     to_t = sub(target, root)
     dist = ops.sqrt(dot(to_t, to_t))
-    far = dist > sum(d)
-    if ops.any(far):  # unreachable: stretched straight at the target
+    # Stretched straight, the end is |dist - reach| from the target: within tol of the reach
+    # that is the answer (the lecture's fabrik_positions decides the same).
+    far = ops.both(dist > sum(d) - tol, ops.dist(P[-1], target) >= tol)
+    if ops.any(far):  # at or beyond the reach: stretched straight at the target
         u, reach, straight = scale(to_t, 1.0 / ops.where(dist > TINY, dist, 1.0)), 0.0, [root]
         for length in d:
             reach = reach + length
@@ -344,14 +348,15 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Ops
 
 
 def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
-                 max_iter: int, *, limits: list[tuple], record: bool, ops: Ops
+                 max_iter: int, *, limits: list[tuple], record: bool, ops: Ops, done: Any = False
                  ) -> tuple[list[Quat], list[Vec], History, list]:
     """FABRIK: on positions alone for a chain of free ball joints
-    (:func:`solve_fabrik_points`), else with the backward pass in joint space
-    (:func:`solve_fabrik_joints`)."""
+    (:func:`solve_fabrik_points`, whose own reachability branch answers a ``done`` problem),
+    else with the backward pass in joint space (:func:`solve_fabrik_joints`)."""
     if chain.free_balls and not limits:
         return solve_fabrik_points(chain, R, base, p0, target, tol, max_iter, record, ops)
-    return solve_fabrik_joints(chain, R, base, p0, target, tol, max_iter, limits, record, ops)
+    return solve_fabrik_joints(chain, R, base, p0, target, tol, max_iter, limits, record, ops,
+                               done)
 
 
 def solve_fabrik_points(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec,
@@ -386,7 +391,8 @@ def solve_fabrik_points(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
 
 def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec,
                         tol: float, max_iter: int, limits: list[tuple], record: bool,
-                        ops: Ops) -> tuple[list[Quat], list[Vec], History, list]:
+                        ops: Ops, done: Any = False
+                        ) -> tuple[list[Quat], list[Vec], History, list]:
     r"""FABRIK with joint constraints (hinges, limits): forward reaching on the points
     (:func:`reach_forward`), then the backward pass in joint space, root to tip, with the
     parent placed (:math:`Q_{i-1}`, :math:`p_i` by forward kinematics). A ball joint turns its
@@ -405,7 +411,7 @@ def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
     R, _, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
     d, rest = bone_directions(P, ops)
     e = sub(target, P[-1])
-    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops)
+    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops, done=done)
     frames = [R] if record else []
     while ops.any(history.active) and chain.variables:
         reached = reach_forward(P, target, d, rest, ops)
@@ -439,7 +445,7 @@ def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
 # --------------------------------------------------------------------------- CCD
 def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
               max_iter: int, *, tip_to_root: bool, max_angle: float | None,
-              limits: list[tuple], record: bool, ops: Ops
+              limits: list[tuple], record: bool, ops: Ops, done: Any = False
               ) -> tuple[list[Quat], list[Vec], History, list]:
     r"""CCD sweeps, as :func:`.tree_solvers.solve_ccd` on the general model: every joint
     in turn (tip to root, or root to tip) turns the effector direction :math:`e - r_i` towards
@@ -454,7 +460,7 @@ def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Ve
     Q, P = chain.forward(R, base, p0)
     R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
     e = sub(target, P[-1])
-    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops)
+    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops, done=done)
     frames = [R] if record else []
     while ops.any(history.active) and chain.variables:
         new, Q, P = list(R), list(Q), list(P)

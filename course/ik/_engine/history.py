@@ -23,15 +23,18 @@ class History:
     window = 8
 
     def __init__(self, err: Any, tol: float, max_iter: int, progress: Any = None,
-                 ops: Ops = ARRAYS):
+                 ops: Ops = ARRAYS, done: Any = False):
         """``progress`` (B,), if given, is the starting objective the stall test then watches
-        (see :meth:`update`)."""
+        (see :meth:`update`); ``done`` (B,) marks the problems whose start is already their
+        best pose (stretched at a target beyond the reach, :mod:`.reach`): unreached, they
+        stop at once, stalled."""
         self.tol, self.max_iter, self.ops = tol, max_iter, ops
         self.residuals = [ops.copy(err)]
         self._progress: list = [] if progress is None else [ops.copy(progress)]
         self.iterations = ops.full(err, 0)
-        self.stalled = ops.full(err, False)
-        self.active = err >= tol if max_iter > 0 else ops.full(err, False)
+        self.stalled = ops.both(ops.full(err, True), ops.both(done, err >= tol))
+        self.active = (ops.both(err >= tol, ops.invert(self.stalled)) if max_iter > 0
+                       else ops.full(err, False))
         # Set by the Jacobian methods: the final Jacobian has lost rank.
         self.singular = ops.full(err, False)
 

@@ -23,7 +23,8 @@ class Request:
     ``([B,] 4)`` targets; ``limits`` holds each variable's :class:`~.components.Limit` (None:
     free) and ``limited`` whether any limits were given at all;
     ``options`` are the method's options with every default filled in; ``pos_weight`` (E,)
-    and ``rot_weight`` (E_r,) the targets' relative weights (largest 1).
+    and ``rot_weight`` (E_r,) the targets' relative weights (largest 1); ``reach_start``
+    whether a target near the full reach starts from the reach-aware start (:mod:`.reach`).
     """
 
     skeleton: Any
@@ -46,6 +47,7 @@ class Request:
     max_iter: int
     record: bool
     options: dict[str, Any]
+    reach_start: bool = True
 
     def rows(self) -> Iterator[Request]:
         """The batch's problems, one by one (each without a batch axis)."""
@@ -68,8 +70,9 @@ def _row(a: Array, i: int, batched_ndim: int) -> Array:
 
 class Solved(NamedTuple):
     """What an engine hands back: the pose (local rotations, root position, positions, with
-    a batch's leading ``B``), its :class:`History`, whether each target is out of reach, and
-    the recorded ``(local rotations, positions)`` of every iteration (``record``) or None."""
+    a batch's leading ``B``), its :class:`History`, whether each target is out of reach, the
+    recorded ``(local rotations, positions)`` of every iteration (``record``) or None, and
+    whether each problem iterated from the reach-aware start (:mod:`.reach`)."""
 
     local: Array
     root_pos: Array
@@ -77,3 +80,4 @@ class Solved(NamedTuple):
     history: History
     unreachable: Any
     frames: list[tuple[Array, Array]] | None
+    reach_start: Any = False

@@ -40,6 +40,7 @@ from course.rotations import matrix_from_quat, quat_from_matrix
 
 from .components import Limit, limit
 from .ops import ARRAYS
+from .reach import reach_points
 from .small import (
     TINY,
     best_rotation,
@@ -496,6 +497,9 @@ class Problem:
         Each variable's limit (:class:`~course.ik._engine.components.Limit`; None: free).
     pos_weight, rot_weight : ndarray, shapes (E,), (E_r,)
         The targets' relative weights (largest 1).
+    done : bool or ndarray of bool, shape (B,)
+        Problems whose start is already their best pose (:meth:`reach_start`): the solvers'
+        :class:`~course.ik._engine.history.History` stops them at once.
     """
 
     model: TreeModel
@@ -508,6 +512,7 @@ class Problem:
     limits: tuple[Limit | None, ...]
     pos_weight: Array
     rot_weight: Array
+    done: Any = False
 
     def __post_init__(self) -> None:
         w = np.concatenate([self.pos_weight, self.rot_weight])
@@ -556,28 +561,24 @@ class Problem:
         delta = np.where(need[:, None], bend_increment(m.hinge, u), 0.0)
         return self.project(m.step(Rn, M, self.base, delta))
 
-    def stretch_if_far(self, Rn: Array, tol: float) -> Array:
-        """Edge rotations of a serial chain of free ball joints stretched straight at its
-        target (:meth:`fit_free`, every bone keeping its twist) in the problems whose target
-        lies at or beyond the reach (distance at least the sum of the bones less ``tol``) and
-        is not yet reached; the others unchanged.
-
-        Why: there the stretched pose is the answer (within ``tol``) or the best pose, and
-        no iterative method gets there in time: near the straight pose the error is flat (it
-        changes with the square of the bend), so CCD, FABRIK and the Jacobian methods crawl
-        (at exactly full reach they stopped 4e-4 to 2e-2 away). The caller checks the chain.
-        """
-        m = self.model
-        to_t = self.target_pos[:, 0] - self.p0
-        d = norm(to_t)
+    def reach_start(self, Rn: Array, tol: float,
+                    axis: Array | None) -> tuple[Array, NDArray[np.bool_]]:
+        """Edge rotations of a serial chain put on the reach-aware start
+        (:func:`~course.ik._engine.reach.reach_points`: bent evenly in a plane to the target's
+        distance, aimed at it, projected into the limits) in the problems whose target lies at
+        or near its full reach, and which those are (B,); the others unchanged. Without limits
+        a stretched start is the answer: :attr:`done` marks it. ``axis`` is the common hinge
+        axis (in the joints' frames) of a chain of hinges, None for balls; the caller checks
+        the chain (:attr:`~course.ik._engine.chain.SerialChain.bendable`)."""
         _, p = self.forward(Rn)
-        need = ((d >= m.reach_far[0] - tol) & (d > 0)
-                & (norm(self.target_pos[:, 0] - p[:, m.effectors[0]]) >= tol))
-        if not need.any():
-            return Rn
-        u = to_t / np.where(need, d, 1.0)[:, None]
-        straight = self.p0[:, None] + np.cumsum(norm(m.bone))[:, None] * u[:, None]
-        return np.where(need[:, None, None, None], self.fit_free(Rn, straight), Rn)
+        normal = None if axis is None else matvec(self.base, axis)
+        start = reach_points(p, self.target_pos[:, 0], normal, tol)
+        if start is None:
+            return Rn, np.zeros(self.batch, dtype=bool)
+        wanted, need, straight = start
+        if not self.limited:
+            self.done = straight
+        return np.where(need[:, None, None, None], self.fit(Rn, wanted, subtree=False), Rn), need
 
     def project(self, Rn: Array) -> Array:
         """Edge rotations with every variable projected into its limits."""

@@ -63,7 +63,7 @@ def solve_ccd(
     m = problem.model
     Rn = problem.Rn.copy()
     M, p = problem.forward(Rn)
-    history = History(problem.error(M, p)[1], tol, max_iter)
+    history = History(problem.error(M, p)[1], tol, max_iter, done=problem.done)
     frames = [Rn.copy()] if record else []
     first_col = np.searchsorted(m.col_var, np.arange(len(m.var_nodes)))
     order = np.arange(len(m.var_nodes))
@@ -186,7 +186,7 @@ def solve_fabrik(
         history.active[:] = False
         return Rn, history, []
 
-    history = History(problem.error(*problem.forward(Rn))[1], tol, max_iter)
+    history = History(problem.error(*problem.forward(Rn))[1], tol, max_iter, done=problem.done)
     frames = [Rn] if record else []
     # Each node's pull on its sub-base: the heaviest position target below it (0: none).
     pull = (m.descendant[:, m.effectors] * problem.pos_weight).max(axis=1, initial=0.0)
@@ -329,7 +329,7 @@ def solve_jacobian(
     # The objective every step reduces: the length of the whole error vector,
     # sqrt(sum of squares) (one effector: its error).
     size = np.sqrt((e * e).sum(axis=1))
-    history = History(err, tol, max_iter, progress=size)
+    history = History(err, tol, max_iter, progress=size, done=problem.done)
     frames = [Rn] if record else []
     scale = np.ones(problem.batch)
     while history.active.any() and m.n_cols:
@@ -503,12 +503,16 @@ def _two_link_hinge_knee(problem: Problem, M: Array, p: Array, t: Array, knee_ax
 
 def solve_on_tree(req: Request, solver: Any, iterative: bool = True) -> Solved:
     """Run a tree ``solver`` on a request as a batch (one problem: a batch of one, unbatched
-    at the end). An ``iterative`` method starts from the bent (and, on a chain of free balls,
-    stretched) start of :meth:`Problem.bend_if_straight` and :meth:`Problem.stretch_if_far`."""
+    at the end). An ``iterative`` method starts, on a serial chain that can bend evenly, from
+    the reach-aware start of :meth:`Problem.reach_start` where its target lies at or near its
+    full reach, then from the bent start of :meth:`Problem.bend_if_straight`."""
     problem, base = problem_of(req)
+    reach_start = np.zeros(req.B, dtype=bool)
     if iterative:
-        if req.serial is not None and req.serial.free_balls and not req.limited:
-            problem.Rn = problem.stretch_if_far(problem.Rn, req.tol)
+        chain = req.serial
+        if req.reach_start and chain is not None and chain.bendable:
+            axis = None if chain.free_balls else np.array(chain.axes[0])
+            problem.Rn, reach_start = problem.reach_start(problem.Rn, req.tol, axis)
         problem.Rn = problem.bend_if_straight(problem.Rn, req.tol)
     Rn, history, frames = solver(problem, req.tol, req.max_iter, req.record, **req.options)
     local_b, root_b, Q_k, p_k = base
@@ -526,9 +530,9 @@ def solve_on_tree(req: Request, solver: Any, iterative: bool = True) -> Solved:
     if not req.batched:  # one problem, solved as a batch of one
         pose = tuple(a[0] for a in pose)
         recorded = [(q[0], p[0]) for q, p in recorded]
-        unreachable = unreachable[0]
+        unreachable, reach_start = unreachable[0], bool(reach_start[0])
         history.unbatch()
-    return Solved(*pose, history, unreachable, recorded if req.record else None)
+    return Solved(*pose, history, unreachable, recorded if req.record else None, reach_start)
 
 
 def problem_of(req: Request) -> tuple[Problem, tuple[Array, Array, Array | None, Array]]:
