@@ -35,6 +35,7 @@ OLDEST_TESTS := $(wildcard tests/test_rotations_*.py) tests/test_swing_twist.py 
 	tests/test_motion.py tests/test_ik_geometry.py tests/test_ik_solvers.py \
 	tests/test_ik_robustness.py tests/test_retarget.py tests/test_keyframes.py \
 	tests/test_keyframes_motion.py tests/test_keyframes_rotations.py tests/test_mass_spring.py \
+	tests/test_foot_sliding.py \
 	tests/test_robustness_library.py tests/test_robustness_io.py tests/test_data.py
 
 test-oldest:

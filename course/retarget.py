@@ -49,8 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._typing import Array, BoolArray
-from .data.registry import CMU_CM_PER_UNIT
+from ._typing import Array
 from .motion import Motion, default_channels
 from .rotations import (
     quat_between,
@@ -477,77 +476,3 @@ def bone_direction_errors(
     cross = np.linalg.norm(np.cross(d_s, d_t), axis=-1)
     angle: Array = np.degrees(np.arctan2(cross, np.einsum("...i,...i->...", d_s, d_t)))
     return angle
-
-
-# --------------------------------------------------------------------------- foot contact
-@dataclass(frozen=True)
-class FootSliding:
-    """How far a foot slides while it is on the ground: in all (cm) and as a speed (cm/s,
-    independent of the frame rate)."""
-
-    foot: str
-    contact_frames: int
-    total_cm: float
-    mean_cm_per_s: float
-    max_cm_per_s: float
-
-    def __str__(self) -> str:
-        return (f"{self.foot:<14} {self.contact_frames:4d} contact frames: slides "
-                f"{self.total_cm:6.2f} cm, {self.mean_cm_per_s:5.2f} cm/s mean, "
-                f"{self.max_cm_per_s:6.2f} cm/s max")
-
-
-def foot_contacts(
-    motion: Motion,
-    feet: Sequence[str],
-    height_tolerance: float | None = None,
-    speed_tolerance: float | None = None,
-) -> BoolArray:
-    """Contact frames per foot, bool (F, n_feet): the foot joint low *and* slow.
-
-    Low: within ``height_tolerance`` of its lowest height in the clip (default 10 % of the
-    rest hip height; captured floors are rarely level to the centimetre). Slow: horizontal
-    speed (central differences) at most ``speed_tolerance`` per second (default 30 % of the hip
-    height per second, about 25 cm/s for a person): a swinging foot passes low but fast.
-    """
-    js = [_joint(motion.skeleton, f, "feet") for f in feet]
-    h = rest_height(motion.skeleton)
-    low_tol = 0.1 * h if height_tolerance is None else float(height_tolerance)
-    fast_tol = 0.3 * h if speed_tolerance is None else float(speed_tolerance)
-    P = motion.forward_kinematics()[0][:, js]
-    y = P[..., 1]
-    low: BoolArray = y <= y.min(axis=0) + low_tol
-    if motion.n_frames < 2:
-        return low
-    speed = np.linalg.norm(np.gradient(P[..., [0, 2]], axis=0), axis=-1) / motion.frame_time
-    slow: BoolArray = speed <= fast_tol
-    return low & slow
-
-
-def foot_sliding(
-    motion: Motion,
-    feet: Sequence[str],
-    contacts: ArrayLike | None = None,
-    cm_per_unit: float = CMU_CM_PER_UNIT,
-) -> list[FootSliding]:
-    """Horizontal (x, z) motion of each foot between consecutive contact frames.
-
-    ``contacts`` (bool, (F, n_feet)) defaults to :func:`foot_contacts` of this clip; pass the
-    source clip's contacts to measure a retargeted clip on the same frames.
-    """
-    js = [_joint(motion.skeleton, f, "feet") for f in feet]
-    on = foot_contacts(motion, feet) if contacts is None else np.asarray(contacts, dtype=bool)
-    if on.shape != (motion.n_frames, len(js)):
-        raise ValueError(f"contacts: expected shape ({motion.n_frames}, {len(js)}), got "
-                         f"{on.shape}")
-    xz = motion.forward_kinematics()[0][:, js][..., [0, 2]]
-    step = np.linalg.norm(np.diff(xz, axis=0), axis=-1) * cm_per_unit  # (F - 1, n_feet)
-    both = on[1:] & on[:-1]
-    out = []
-    for k, foot in enumerate(feet):
-        s = step[both[:, k], k]
-        speed = s / motion.frame_time if s.size else np.zeros(1)
-        out.append(FootSliding(
-            foot, int(on[:, k].sum()), float(s.sum()), float(speed.mean()), float(speed.max())
-        ))
-    return out

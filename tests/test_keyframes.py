@@ -235,6 +235,30 @@ def test_continuity_order_measured(name, order):
         assert max(jump(f, x, order + 1) for x in TIMES[1:-1]) > 0.1
 
 
+@pytest.mark.parametrize(("curve", "expected"), [
+    (lambda t: np.where(t < 0.5, 0.0, 1.0), (1.0, 0.0, 0.0)),             # a step
+    (lambda t: np.abs(t - 0.5) * 3.0, (0.0, 6.0, 0.0)),                   # a kink: -3 | +3
+    (lambda t: np.where(t < 0.5, 0.0, 2.0 * (t - 0.5) ** 2), (0.0, 0.0, 4.0)),  # p'' 0 | 4
+    (lambda t: np.sin(3 * t), (0.0, 0.0, 0.0)),                           # smooth
+])
+def test_continuity_jumps_closed_forms(curve, expected):
+    np.testing.assert_allclose(kf.continuity_jumps(curve, 0.5), expected, atol=1e-6)
+
+
+def test_continuity_jumps_measures_what_the_schemes_promise():
+    """The notebook's C^k table: each scheme's order, from the library's measure."""
+    keys = np.array([0.0, 0.8, 0.7, 0.5, 1.0, -0.6])
+    times = np.array([0.0, 0.5, 1.2, 1.6, 2.4, 3.0])
+    for name, order in (("linear", 0), ("catmull_rom", 1), ("cubic", 2)):
+        worst = np.max([kf.continuity_jumps(lambda t, n=name: SCHEMES[n](keys, times, t), x)
+                        for x in times[1:-1]], axis=0)
+        assert int(np.sum(np.cumprod(worst < [1e-9, 1e-3, 1e-1])) - 1) == order, (name, worst)
+    with pytest.raises(ValueError, match="h: expected > 0"):
+        kf.continuity_jumps(np.sin, 0.5, h=0.0)
+    with pytest.raises(ValueError, match="curve: expected 4 values"):
+        kf.continuity_jumps(lambda t: np.zeros(3), 0.5)
+
+
 def test_catmull_rom_by_time_is_c1_where_uniform_knots_are_not():
     keys = np.array([0.0, 1.0, 3.0, 2.0, 2.5])
     times = np.array([0.0, 0.2, 1.5, 1.7, 3.0])

@@ -1,4 +1,5 @@
-"""course.keyframes.motion and .blend: keyframed clips, alignment, cross-fades, foot sliding."""
+"""course.keyframes.motion and .blend: keyframed clips, alignment, cross-fades (their foot
+sliding: tests/test_foot_sliding.py)."""
 
 from __future__ import annotations
 
@@ -155,29 +156,3 @@ def test_concatenate_weights_and_errors(walk, wave):
         kf.concatenate(walk, walk[::2], 5)
     with pytest.raises(ValueError, match="blend_frames: expected an integer from 0 to 10"):
         kf.concatenate(walk, walk[:10], 11)
-
-
-# --------------------------------------------------------------------------- foot sliding
-def test_planted_feet_do_not_slide(wave):
-    slide = kf.foot_sliding(wave, ("LeftFoot", "RightFoot"))
-    assert np.mean(~np.isnan(slide)) > 0.9  # in contact nearly always
-    assert np.nanmax(slide) < 1e-3
-
-
-def test_foot_sliding_measures_a_dragged_foot(wave):
-    """The wave's planted feet dragged along x at 0.1 units per frame slide 0.1 units."""
-    dragged = Motion(wave.skeleton, wave.local_rotations,
-                     wave.root_positions + np.arange(wave.n_frames)[:, None] * [0.1, 0, 0],
-                     wave.frame_time)
-    slide = kf.foot_sliding(dragged, ("LeftFoot", "RightFoot"), unit_cm=1.0)
-    assert np.allclose(np.nanmean(slide), 0.1, atol=1e-3)
-    with pytest.raises(KeyError, match="Lefty"):
-        kf.foot_sliding(wave, ("Lefty",))
-
-
-def test_matched_blend_slides_less_than_a_mismatched_one(walk):
-    def seam_sliding(start, n=20):
-        slide = kf.foot_sliding(kf.concatenate(walk[:300], walk[start:], n))
-        return np.nanmean(slide[300 - n - 5:300 + 5])
-
-    assert seam_sliding(129) < 0.5 * seam_sliding(150)

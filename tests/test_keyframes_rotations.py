@@ -25,15 +25,8 @@ def keys_along_a_path(rng, n=5, step_deg=50.0):
     return np.array(q) * rng.choice([-1.0, 1.0], size=(n, 1))
 
 
-def speed_jumps(f, times, h=1e-4):
-    """|change of the angular velocity| across each interior key: the velocities between
-    samples on each side, extrapolated linearly to the key (second order), compared."""
-    out = []
-    for x in times[1:-1]:
-        t7 = x + h * np.arange(-3.0, 4.0)
-        w = kf.angular_velocity(f(t7), t7)  # at x + h (-2.5, ..., 2.5)
-        out.append(np.linalg.norm((1.5 * w[3] - 0.5 * w[4]) - (1.5 * w[2] - 0.5 * w[1])))
-    return np.array(out)
+def speed_jumps(f, times):
+    return np.array([kf.angular_velocity_jump(f, x) for x in times[1:-1]])
 
 
 def test_slerp_keys_matches_scipy_slerp():
@@ -94,6 +87,20 @@ def test_squad_is_c1_where_slerp_is_not():
     squad_jumps = speed_jumps(lambda t: kf.squad(q, TIMES, t), TIMES)
     assert squad_jumps.max() < 1e-5, squad_jumps
     assert slerp_jumps.min() > 0.1, slerp_jumps
+
+
+@pytest.mark.parametrize(("w0", "w1"), [(1.0, 1.0), (0.5, 2.0), (-1.0, 3.0)])
+def test_angular_velocity_jump_closed_form(w0, w1):
+    """A turn about one axis at w0 rad/s before t = 1 and w1 after: the jump is |w1 - w0|."""
+    axis = np.array([1.0, 2.0, 2.0]) / 3.0
+
+    def q_of_t(t):
+        angle = np.where(t < 1.0, w0 * (t - 1.0), w1 * (t - 1.0))
+        return rot.quat_from_axis_angle(axis, angle)
+
+    assert kf.angular_velocity_jump(q_of_t, 1.0) == pytest.approx(abs(w1 - w0), abs=1e-7)
+    with pytest.raises(ValueError, match="h: expected > 0"):
+        kf.angular_velocity_jump(q_of_t, 1.0, h=-1.0)
 
 
 def test_squad_is_shoemakes_formula_with_course_slerp():

@@ -13,15 +13,13 @@ from hypothesis import strategies as st
 from rotation_asserts import assert_quat_equal, random_quats
 
 from course.bvh import load_bvh
+from course.foot_sliding import foot_contacts, foot_sliding
 from course.motion import Motion
 from course.retarget import (
-    CMU_CM_PER_UNIT,
     a_pose_from_t_pose,
     bone_direction_errors,
     compare_rest_poses,
     copy_local_rotations,
-    foot_contacts,
-    foot_sliding,
     rest_corrections,
     rest_height,
     retarget,
@@ -139,9 +137,8 @@ def test_uniformly_scaled_skeleton_gives_the_scaled_motion(walk):
     np.testing.assert_allclose(out.forward_kinematics()[0], 1.3 * walk.forward_kinematics()[0],
                                rtol=0, atol=1e-9)
     before, after = foot_sliding(walk, TOES), foot_sliding(out, TOES)
-    for b, a in zip(before, after, strict=True):
-        assert a.contact_frames == b.contact_frames
-        assert a.total_cm == pytest.approx(1.3 * b.total_cm, rel=1e-9)
+    np.testing.assert_array_equal(after.contacts, before.contacts)
+    np.testing.assert_allclose(after.total_cm, 1.3 * before.total_cm, rtol=1e-9)
 
 
 def generated_skeleton(walk):
@@ -175,9 +172,9 @@ def test_generated_skeleton_with_extra_and_missing_joints(walk):
     contacts = foot_contacts(walk, TOES)
     before = foot_sliding(walk, TOES)
     after = foot_sliding(out, TOES, contacts=contacts)
-    for b, a in zip(before, after, strict=True):
-        assert a.contact_frames == b.contact_frames > 10
-        assert a.mean_cm_per_s == pytest.approx(ratio * b.mean_cm_per_s, rel=1e-9)
+    np.testing.assert_array_equal(after.contact_frames, before.contact_frames)
+    assert before.contact_frames.min() > 10
+    np.testing.assert_allclose(after.mean_cm_per_s, ratio * before.mean_cm_per_s, rtol=1e-9)
 
 
 def test_cmu_onto_the_bundled_skeleton(walk):
@@ -197,8 +194,8 @@ def test_cmu_onto_the_bundled_skeleton(walk):
     after = foot_sliding(out, ["LeftFoot_end", "RightFoot_end"],
                          contacts=foot_contacts(walk, TOES))
     ratio = rest_height(wave) / rest_height(walk.skeleton)
-    for b, a in zip(before, after, strict=True):
-        assert a.mean_cm_per_s <= ratio * b.mean_cm_per_s + SLIDE_BOUND, (a, b)
+    assert np.all(after.mean_cm_per_s <= ratio * before.mean_cm_per_s + SLIDE_BOUND), (after,
+                                                                                       before)
 
 
 # --------------------------------------------------------------------------- errors
@@ -231,11 +228,6 @@ def test_other_errors_name_the_argument(walk):
         a_pose_from_t_pose(leg, arms=["k"])
     with pytest.raises(ValueError, match="local_rotations"):
         with_rest_pose(walk.skeleton, np.ones((3, 4)))
-    with pytest.raises(ValueError, match="contacts"):
-        foot_sliding(walk, TOES, contacts=np.ones((3, 2), bool))
-    with pytest.raises(ValueError, match="feet: .*'LeftToe'"):
-        foot_sliding(walk, ["LeftToe"])
-    assert CMU_CM_PER_UNIT == pytest.approx(5.644, abs=1e-3)
 
 
 # --------------------------------------------------------------------------- random trees

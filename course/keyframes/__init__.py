@@ -7,16 +7,18 @@ One module per step of the lecture:
   :func:`hermite`, :func:`catmull_rom`, :func:`bezier` (de Casteljau), with velocities;
 * :mod:`.rotations`: rotation keys, :func:`slerp_keys` per segment and :func:`squad`;
 * :mod:`.motion`: keyframing a :class:`~course.motion.Motion` every k frames and the error;
-* :mod:`.blend`: aligning, cross-fading and concatenating two clips; foot sliding.
+* :mod:`.blend`: aligning, cross-fading and concatenating two clips, and their foot
+  contacts (foot sliding itself: :mod:`course.foot_sliding`).
 """
 
 from ..data.registry import CMU_CM_PER_UNIT
-from .blend import aligned, concatenate, facing_yaw, foot_sliding, smoothstep
+from .blend import aligned, concatenate, concatenated_contacts, facing_yaw, smoothstep
 from .curves import (
     KNOTS,
     bezier,
     catmull_rom,
     check_times,
+    continuity_jumps,
     cubic,
     cubic_tangents,
     hermite,
@@ -27,6 +29,7 @@ from .curves import (
 from .motion import joint_position_error, key_frames, keyframed
 from .rotations import (
     angular_velocity,
+    angular_velocity_jump,
     quat_exp,
     quat_log,
     same_hemisphere,
@@ -40,14 +43,16 @@ __all__ = [
     "KNOTS",
     "aligned",
     "angular_velocity",
+    "angular_velocity_jump",
     "bezier",
     "catmull_rom",
     "check_times",
+    "continuity_jumps",
     "concatenate",
+    "concatenated_contacts",
     "cubic",
     "cubic_tangents",
     "facing_yaw",
-    "foot_sliding",
     "hermite",
     "joint_position_error",
     "key_frames",

@@ -13,29 +13,21 @@ Playing clip B after clip A needs two things the lecture names:
 
 The result has :math:`F_A + F_B - n` frames. A blend is only as good as its feet: during the
 transition a foot that stands in both clips may stand at two different places, and the
-weighted average drags it over the floor. :func:`foot_sliding` measures that (cm per frame
-of the feet while in contact).
+weighted average drags it over the floor. :func:`course.foot_sliding.foot_sliding` measures
+that, on the contacts of the two clips (:func:`concatenated_contacts`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from .. import rotations as rot
-from ..data.registry import CMU_CM_PER_UNIT
+from .._typing import BoolArray
 from ..motion import Motion
 from .motion import _check_same_skeleton
 
 Array = NDArray[np.float64]
-
-FEET = ("LeftToeBase", "RightToeBase")
-
-# A foot is in contact with the ground while within this height (in clip units) of the
-# lowest point either foot reaches in the clip: 0.5 CMU units is 2.8 cm.
-CONTACT_HEIGHT = 0.5
 
 
 def facing_yaw(q: Array) -> Array:
@@ -142,36 +134,33 @@ def concatenate(first: Motion, second: Motion, blend_frames: int = 0) -> Motion:
     )
 
 
-def foot_sliding(motion: Motion, feet: Sequence[str] = FEET, *,
-                 contact_height: float = CONTACT_HEIGHT, unit_cm: float = CMU_CM_PER_UNIT) -> Array:
-    r"""How far each foot slides over the ground per frame while in contact, in cm.
+def concatenated_contacts(first: ArrayLike, second: ArrayLike, blend_frames: int) -> BoolArray:
+    """Contact frames of ``concatenate(A, B, n)`` from the clips' own contacts.
 
-    A foot is in contact at a frame when its height is within ``contact_height`` of the
-    lowest height any of ``feet`` reaches in the clip; between frames :math:`t` and
-    :math:`t+1` with the foot in contact at both, its slide is the horizontal (x, z) distance
-    it moved. A planted foot should not move at all.
+    Frames taken from one clip keep its contacts; in the ``n`` cross-faded frames a foot is in
+    contact where it is in *both* clips: it stands in both, so the blend should leave it
+    standing (where it drags it, :func:`course.foot_sliding.foot_sliding` measures that).
+    Contacts of a blend cannot be found on the blend itself: a dragged foot moves fast and
+    would not count as standing.
 
     Parameters
     ----------
-    motion : Motion
-    feet : sequence of str
-        Joint names (default: the CMU toe joints).
-    contact_height : float
-        In the clip's length units.
-    unit_cm : float
-        Centimetres per length unit (default: CMU).
+    first, second : array_like of bool, shape (F_A, n_feet), (F_B, n_feet)
+        :func:`course.foot_sliding.foot_contacts` of A and of B (as passed to ``concatenate``).
+    blend_frames : int
+        The ``n`` given to :func:`concatenate`.
 
     Returns
     -------
-    ndarray, shape (F - 1, len(feet))
-        NaN where the foot is not in contact at both frames; ``np.nanmean`` of a window of
-        rows is the mean sliding of the feet there.
+    ndarray of bool, shape (F_A + F_B - n, n_feet)
     """
-    joints = [motion.skeleton.index(f) for f in feet]
-    p, _ = motion.forward_kinematics()
-    p = p[:, joints]
-    height = p[..., 1]
-    contact = height <= height.min() + contact_height
-    both = contact[1:] & contact[:-1]
-    slide = unit_cm * np.linalg.norm(np.diff(p[..., [0, 2]], axis=0), axis=-1)
-    return np.where(both, slide, np.nan)
+    a, b = np.asarray(first), np.asarray(second)
+    if a.dtype != np.bool_ or b.dtype != np.bool_ or a.ndim != 2 or b.shape[1:] != a.shape[1:]:
+        raise ValueError(f"first, second: expected booleans of shapes (F_A, n_feet) and "
+                         f"(F_B, n_feet), got {a.dtype} {a.shape} and {b.dtype} {b.shape}")
+    n = blend_frames
+    if not isinstance(n, (int, np.integer)) or not 0 <= n <= min(len(a), len(b)):
+        raise ValueError(f"blend_frames: expected an integer from 0 to {min(len(a), len(b))}, "
+                         f"got {n!r}")
+    head = len(a) - n
+    return np.concatenate([a[:head], a[head:] & b[:n], b[n:]])

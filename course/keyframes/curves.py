@@ -30,6 +30,9 @@ The schemes:
 * :func:`catmull_rom`: Hermite with tangents from the neighbouring keys; C¹, local;
 * :func:`bezier`: a Bézier curve from control points by de Casteljau's algorithm.
 
+:func:`continuity_jumps` measures a curve's continuity at a key: the jumps of its value,
+velocity and acceleration, from finite differences on each side.
+
 All piecewise cubics are evaluated in Hermite form on each segment,
 
 .. math::
@@ -40,6 +43,8 @@ with :math:`H_{00} = 2u^3-3u^2+1`, :math:`H_{10} = u^3-2u^2+u`, :math:`H_{01} = 
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -438,3 +443,37 @@ def bezier(control_points: ArrayLike, s: ArrayLike, *, derivative: int = 0) -> A
     while len(level) > 1:
         level = [(1 - sc) * a + sc * c for a, c in zip(level[:-1], level[1:], strict=True)]
     return np.array(level[0])
+
+
+def continuity_jumps(curve: Callable[[Array], Array], x: float, h: float = 1e-4) -> Array:
+    r"""How much a scalar curve's value, velocity and acceleration jump at ``x``: shape (3,).
+
+    Each side is measured on its own samples only, :math:`v_k = p(x \pm k h)`, k = 1..4
+    (not ``x`` itself, which belongs to one side): the cubic through them, extrapolated to
+    ``x``, gives that side's :math:`p, p', p''` there, off by :math:`O(h^4), O(h^3), O(h^2)`.
+    The jumps are the absolute differences of the two sides. A curve is :math:`C^k` at ``x``
+    when the first k + 1 are (numerically) zero; rounding adds about :math:`10\varepsilon/h`
+    and :math:`10\varepsilon/h^2` to the derivatives, so compare with tolerances (1e-9, 1e-3
+    and 1e-1 for h = 1e-4 and curves of size 1).
+
+    Parameters
+    ----------
+    curve : callable
+        ``curve(t)`` for an array of times ``t`` (4,), returning values (4,).
+    x : float
+        Where to look, e.g. an interior key time (both sides inside the curve's range).
+    h : float
+        Sample spacing.
+    """
+    if not h > 0:
+        raise ValueError(f"h: expected > 0, got {h}")
+    sides = np.empty((2, 3))
+    for k, side in enumerate((-1.0, 1.0)):
+        offsets = side * h * np.arange(1.0, 5.0)
+        v = np.asarray(curve(x + offsets), dtype=np.float64)
+        if v.shape != (4,):
+            raise ValueError(f"curve: expected 4 values for 4 times, got shape {v.shape}")
+        c = np.linalg.solve(np.vander(offsets, 4, increasing=True), v)  # p(x + s) = sum c_i s^i
+        sides[k] = (c[0], c[1], 2 * c[2])
+    jumps: Array = np.abs(sides[1] - sides[0])
+    return jumps

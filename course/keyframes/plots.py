@@ -22,6 +22,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 from PIL import Image
 
+from ..viz.chain_plots import _style
 from .curves import bezier, catmull_rom, cubic, linear, polynomial
 
 SCHEME_COLORS = {
@@ -77,6 +78,8 @@ def _figure(width: float, height: float, rows: int = 1) -> tuple[Figure, Any]:
     figure = Figure(figsize=(width, height), dpi=90, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.subplots(rows, 1, sharex=True)
+    for ax in np.atleast_1d(axes):
+        _style(ax)  # the notebooks' look, without pyplot's global rcParams
     return figure, axes
 
 

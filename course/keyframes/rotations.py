@@ -30,6 +30,8 @@ segment, and per time only :func:`_exp` and a product remain, on arrays already 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -243,3 +245,27 @@ def angular_velocity(q: ArrayLike, times: ArrayLike) -> Array:
     q, times = _unit_keys(q, times, "q")
     step = rot.quat_mul(q[1:], rot.quat_conjugate(q[:-1]))
     return rot.rotvec_from_quat(step) / _column(np.diff(times), q.ndim - 1)
+
+
+def angular_velocity_jump(q_of_t: Callable[[Array], Array], x: float, h: float = 1e-4) -> float:
+    r"""How much a rotation curve's angular velocity jumps at time ``x`` (radians per unit time).
+
+    :func:`angular_velocity` on seven samples :math:`x + kh`, k = -3..3, gives velocities at
+    the six midpoints; on each side the two nearest are extrapolated linearly to ``x``
+    (:math:`\tfrac32\omega_{\pm 1/2} - \tfrac12\omega_{\pm 3/2}`, second order), and the jump
+    is the norm of their difference: zero (to :math:`O(h^2)`) where the curve is C¹.
+
+    Parameters
+    ----------
+    q_of_t : callable
+        ``q_of_t(t)`` for times ``t`` (7,), returning unit quaternions (7, 4).
+    x : float
+        Where to look, e.g. an interior key time.
+    h : float
+        Sample spacing.
+    """
+    if not h > 0:
+        raise ValueError(f"h: expected > 0, got {h}")
+    t7 = x + h * np.arange(-3.0, 4.0)
+    w = angular_velocity(q_of_t(t7), t7)  # at x + h (-2.5, -1.5, ..., 2.5)
+    return float(np.linalg.norm((1.5 * w[3] - 0.5 * w[4]) - (1.5 * w[2] - 0.5 * w[1])))
