@@ -7,8 +7,8 @@ times and, for each press, takes the time from the key event to the first new pi
 see ``tests/e2e/labkit.py``), never by polling screenshots. Each view is measured with every
 backend asked for, in the same run: ``static`` (PNG images), ``server`` (trame, rendered in
 the kernel) and ``default`` (what a student gets without configuring anything). BVH playback
-also reports the pictures per second while playing and the frames still arriving after pause
-(a backlog).
+also reports the pictures per second while playing, the frame skip the player chose (its
+readout), and the pictures still arriving in the 3 s after pause (a backlog).
 
     .venv/bin/python benchmarks/live_views.py [--steps 30] [--backends static,server,default]
 """
@@ -97,21 +97,38 @@ def _steps(page, label: str, steps: int) -> list[float]:
     return latencies
 
 
-def _playback(page, seconds: float = 4.0) -> tuple[float, int]:
-    """Pictures per second while playing, and how many more arrive in the 3 s after pause
-    (a backlog shows as many; one or two are the frame in flight)."""
-    play = page.locator(".widget-play button").first
+def _pictures(times: list[float], gap_ms: float = 20.0) -> list[float]:
+    """Draw marks closer than ``gap_ms`` are one picture (a render may draw in two passes)."""
+    out: list[float] = []
+    for t in times:
+        if not out or t - out[-1] > gap_ms:
+            out.append(t)
+    return out
+
+
+def _playback(page, seconds: float = 4.0) -> tuple[float, str, int, int]:
+    """Pictures per second while playing, the frame skip the readout names, and the pictures
+    in the 3 s after pause: within 0.6 s (already on their way when pause was pressed; a
+    backlog would show as many more) and later (trame's whole-scene refresh, one second
+    after the last change, redraws the same frame)."""
+    play = page.locator(".course-play")
+    older = not play.count()  # an older checkout: the browser-side Play widget
+    if older:
+        play = page.locator(".widget-play button")
     _settle(page)
-    play.click()
+    play.first.click()
     t0 = _now(page)
     time.sleep(seconds)
-    pause = page.locator(".widget-play button").nth(1)
-    pause.click()
+    skip = page.locator(".widget-html-content").filter(has_text="frame ").last.inner_text()
+    (play.nth(1) if older else play.first).click()
     t1 = _now(page)
     time.sleep(3.0)
-    frames = labkit.frames_after(page, t0)
+    frames = _pictures(labkit.frames_after(page, t0))
     during = [t for t in frames if t <= t1]
-    return len(during) / ((t1 - t0) / 1000), len(frames) - len(during)
+    soon = [t for t in frames if t1 < t <= t1 + 600]
+    skip = skip.split("showing ")[-1] if "showing " in skip else "not shown"
+    return (len(during) / ((t1 - t0) / 1000), skip, len(soon),
+            len(frames) - len(during) - len(soon))
 
 
 def main() -> None:
@@ -129,7 +146,7 @@ def main() -> None:
     backends = args.backends.split(",")
     views = args.views.split(",")
     results: dict[tuple[str, str], list[float]] = {}
-    playback: dict[str, tuple[float, int]] = {}
+    playback: dict[str, tuple[float, str, int, int]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         for b in backends:
@@ -177,9 +194,10 @@ def main() -> None:
             print(f"  {b:<8} median {med:7.1f} ms   p90 {np.nanpercentile(lat, 90):7.1f} ms"
                   f"{ratio}")
     if playback:
-        print("\nbvh_player playback (the Play widget asks for about 30 pictures/s)")
-        for b, (pictures, after) in playback.items():
-            print(f"  {b:<8} {pictures:5.1f} pictures/s shown, {after} more after pause")
+        print("\nbvh_player playback (at most 30 pictures/s asked for, the skip adapted)")
+        for b, (pictures, skip, soon, later) in playback.items():
+            print(f"  {b:<8} {pictures:5.1f} pictures/s shown ({skip}); after pause: "
+                  f"{soon} within 0.6 s, {later} later")
 
 
 if __name__ == "__main__":

@@ -148,3 +148,26 @@ def test_an_unknown_backend_is_named_in_the_error(monkeypatch):
     monkeypatch.setenv("PYVISTA_JUPYTER_BACKEND", "webgl")
     with pytest.raises(ValueError, match="PYVISTA_JUPYTER_BACKEND.*'webgl'"):
         _backend.jupyter_backend()
+
+
+_VSCODE_MARKERS = ("VSCODE_PID", "VSCODE_CWD", "VSCODE_IPC_HOOK_CLI", "CODESPACES",
+                   "REMOTE_CONTAINERS", "SSH_CONNECTION")
+
+
+@pytest.mark.parametrize("env, backend", [
+    ({}, "client"),                                              # JupyterLab on this machine
+    ({"VSCODE_PID": "4242"}, "client"),                          # VS Code, local kernel
+    ({"VSCODE_PID": "4242", "SSH_CONNECTION": "10.0.0.2 5 10.0.0.3 22"}, "static"),  # Remote-SSH
+    ({"VSCODE_CWD": "/w", "REMOTE_CONTAINERS": "true"}, "static"),  # a dev container
+    ({"VSCODE_IPC_HOOK_CLI": "/tmp/x.sock", "CODESPACES": "true"}, "static"),  # a Codespace
+    ({"SSH_CONNECTION": "10.0.0.2 5 10.0.0.3 22"}, "client"),   # Lab over an SSH tunnel
+    ({"JUPYTERHUB_SERVICE_PREFIX": "/user/ada/"}, "client"),     # a hub with the proxy
+    ({"PYVISTA_JUPYTER_BACKEND": "server", "VSCODE_PID": "1", "CODESPACES": "true"}, "server"),
+])
+def test_the_backend_follows_the_environment_markers(monkeypatch, env, backend):
+    for name in (*_VSCODE_MARKERS, "PYVISTA_JUPYTER_BACKEND", "JUPYTERHUB_SERVICE_PREFIX"):
+        monkeypatch.delenv(name, raising=False)
+    for name, value in env.items():
+        monkeypatch.setenv(name, value)
+    monkeypatch.setattr(_backend, "in_jupyter_kernel", lambda: True)
+    assert _backend.jupyter_backend() == backend

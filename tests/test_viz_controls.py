@@ -101,15 +101,148 @@ def test_bvh_player_shows_the_precomputed_frame(sample_motion):
         np.testing.assert_allclose(player.scene.joint_positions, positions[37])
         assert "frame 37" in player.readout.value
         player.sliders["speed"].value = 2.0
-        fps = 1 / sample_motion.frame_time
-        shown = 1000.0 * player.play.step / player.play.interval  # frames of clip per second
-        assert abs(shown - 2 * fps) / (2 * fps) < 0.1
-        player.sliders["loop"].value = False
-        assert player.play.repeat is False
+        assert player.pacer.rate == pytest.approx(2 / sample_motion.frame_time)
         # the root's path lies on the floor, under every frame's root
         path = player.scene._trail.points[:sample_motion.n_frames]
         np.testing.assert_allclose(path[:, [0, 2]], positions[:, 0, [0, 2]])
         assert np.all(path[:, 1] <= positions[..., 1].min() + 1e-9)
+    finally:
+        player.close()
+
+
+class FakeLoop:
+    """A clock and ``call_later`` for playback: time moves only when the loop runs a callback
+    (to its due time) or a picture is drawn (``cost`` seconds each)."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+        self.queue: list[tuple[float, int, object]] = []
+        self.calls = 0
+
+    def clock(self) -> float:
+        return self.now
+
+    def call_later(self, delay: float, fn) -> None:
+        assert delay >= 0
+        self.calls += 1
+        self.queue.append((self.now + delay, self.calls, fn))
+
+    def run(self, seconds: float) -> None:
+        end = self.now + seconds
+        while self.queue:
+            self.queue.sort(key=lambda e: e[:2])
+            due, _, fn = self.queue[0]
+            if due > end:
+                break
+            self.queue.pop(0)
+            self.now = max(self.now, due)
+            fn()
+        self.now = max(self.now, end)
+
+
+def _paced_player(motion, loop: FakeLoop, cost: list[float], **kwargs):
+    """A player whose every picture costs ``cost[0]`` seconds of the fake clock; returns it
+    and the list of frames it drew (in order)."""
+    player = controls.bvh_player(motion, camera="iso", clock=loop.clock,
+                                 call_later=loop.call_later, **kwargs)
+    shown: list[int] = []
+    draw = player.show_frame
+
+    def timed(frame: int) -> None:
+        draw(frame)
+        loop.now += cost[0]
+        shown.append(int(frame))
+
+    player.show_frame = timed
+    return player, shown
+
+
+def test_playback_skips_frames_by_the_measured_picture_cost(sample_motion):
+    import math
+
+    loop, cost = FakeLoop(), [0.05]  # 20 pictures/s at most
+    player, shown = _paced_player(sample_motion, loop, cost)
+    fps = 1 / sample_motion.frame_time
+    try:
+        player.play.value = True
+        assert player.play.description == "pause"
+        loop.run(1.0)
+        skip = math.ceil(fps * 0.05 - 1e-9)  # frames of clip per picture
+        assert player.pacer.skip == skip
+        steps = np.diff(shown)
+        assert np.all(steps[steps > 0] == skip)  # honest: every skip-th frame, no more
+        assert f"every {skip}" in player.readout.value or (skip == 1 and "every frame" in
+                                                            player.readout.value)
+        # the clip keeps its speed: about fps frames of clip per second of clock
+        assert abs(shown[-1] - fps * 1.0) <= 2 * skip
+        # pictures got cheaper (a quieter machine): the skip falls to the display's cap
+        cost[0] = 0.001
+        loop.run(2.0)
+        assert player.pacer.skip == max(1, math.ceil(fps / 30 - 1e-9))
+        assert player.sliders["frame"].value == player.frame == shown[-1]
+        np.testing.assert_allclose(player.scene.joint_positions, player.positions[shown[-1]])
+    finally:
+        player.close()
+
+
+def test_playback_waits_for_the_picture_in_flight_and_pause_stops_at_once(
+        sample_motion, monkeypatch):
+    loop, cost = FakeLoop(), [0.01]
+    player, shown = _paced_player(sample_motion, loop, cost)
+    in_flight = [0]
+    monkeypatch.setattr(player.scene, "pictures_in_flight", lambda: in_flight[0])
+    try:
+        player.play.value = True
+        loop.run(0.2)
+        drawn = len(shown)
+        assert drawn >= 2
+        in_flight[0] = 1  # the last picture is not sent yet: no next one is drawn
+        loop.run(0.5)
+        assert len(shown) in (drawn, drawn + 1)  # at most the one already asked for
+        drawn = len(shown)
+        loop.run(0.3)
+        assert len(shown) == drawn
+        in_flight[0] = 0
+        loop.run(0.2)
+        assert len(shown) > drawn
+        player.play.value = False
+        assert player.play.description == "play" and "showing" not in player.readout.value
+        drawn = len(shown)
+        loop.run(2.0)
+        assert len(shown) == drawn and not loop.queue  # nothing after pause, nothing pending
+        # pause and play again while a picture is pending: still one picture at a time
+        player.play.value = True
+        loop.run(0.3)
+        player.play.value = False
+        player.play.value = True
+        start, t0 = len(shown), loop.now
+        loop.run(1.0)
+        assert len(shown) - start <= (loop.now - t0) / player.pacer.interval + 1
+    finally:
+        player.close()
+
+
+def test_playback_without_loop_stops_on_the_last_frame(sample_motion):
+    loop, cost = FakeLoop(), [0.02]
+    player, shown = _paced_player(sample_motion, loop, cost)
+    last = sample_motion.n_frames - 1
+    try:
+        player.sliders["loop"].value = False
+        player.sliders["frame"].value = last - 5
+        player.play.value = True
+        loop.run(5.0)
+        assert shown[-1] == last and not player.playing and not loop.queue
+        player.play.value = True  # from the end: starts again at 0
+        assert shown[-1] in (0, player.pacer.skip)
+    finally:
+        player.close()
+
+
+def test_playback_needs_a_kernel_loop_without_call_later(sample_motion):
+    player = controls.bvh_player(sample_motion)
+    try:
+        with pytest.raises(RuntimeError, match="kernel"):
+            player.play.value = True
     finally:
         player.close()
 
@@ -142,6 +275,24 @@ def test_bvh_player_keeps_every_frame_in_view(sample_motion, camera):
         player.close()
 
 
+def test_bvh_player_follow_camera_frames_every_pose_large():
+    """follow: the clip's largest pose about the root, wherever the root walks; every frame
+    lies in the view and spans at least a quarter of its shorter side."""
+    from course import data
+
+    walk = data.load("cmu_12_01_walk")
+    player = controls.bvh_player(walk, camera="follow")
+    try:
+        w, h = player.scene.plotter.window_size
+        for f in range(0, walk.n_frames, 7):
+            player.sliders["frame"].value = f
+            uv = player.scene.project(player.positions[f])
+            assert uv.min() >= 0 and uv[:, 0].max() <= w and uv[:, 1].max() <= h, f
+            assert max(np.ptp(uv[:, 0]), np.ptp(uv[:, 1])) >= 0.25 * min(w, h), f
+    finally:
+        player.close()
+
+
 def test_ik_playground_solves_and_replays():
     from course.skeleton import chain
 
@@ -161,6 +312,21 @@ def test_ik_playground_solves_and_replays():
         # the solution is drawn in colour, the start pose as a grey ghost
         assert pg.scene.skeleton("solution").bone_color == PALETTE[0][0]
         assert pg.scene.skeleton("start").bone_color == GHOST[0]
+    finally:
+        pg.close()
+
+
+def test_ik_playground_says_when_a_solve_started_from_the_reach_start():
+    from course.skeleton import chain
+
+    arm = chain([1.0] * 4, axes=[0, 0, 1])
+    pg = controls.ik_playground(arm, methods=["ccd"])
+    try:
+        pg._dragged(np.array([2.0, 1.0, 0.0]))  # 0.56 of the reach: the given start
+        assert pg.result.start == "" and "near full reach" not in pg.readout.value
+        pg._dragged(np.array([3.996, 0.0, 0.0]))  # 0.999 of the reach
+        assert pg.result.start == "reach" and pg.result.converged
+        assert "started bent evenly: the target is near full reach" in pg.readout.value
     finally:
         pg.close()
 

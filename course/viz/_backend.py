@@ -6,8 +6,9 @@ The choice is made for the student, never hard-coded in a notebook:
   images), ``client``, ``server`` or ``trame``;
 - inside a Jupyter kernel with trame installed (``pyvista[jupyter]``): ``"client"``, the
   scene rendered in the browser by vtk.js; a slider step sends only the changed points;
-- in Google Colab (which cannot reach a port of the kernel) and outside a kernel (scripts,
-  tests): ``"static"`` images.
+- in Google Colab (which cannot reach a port of the kernel), in VS Code attached to a remote
+  kernel (SSH, a dev container, Codespaces: its webview reaches ports of the local machine
+  only) and outside a kernel (scripts, tests): ``"static"`` images.
 
 On a JupyterHub (``JUPYTERHUB_SERVICE_PREFIX`` set) the trame iframe reaches the kernel's
 trame server through ``jupyter-server-proxy`` (installed with ``pyvista[jupyter]``; pyvista
@@ -85,7 +86,7 @@ def jupyter_backend() -> str:
             raise ValueError(f"PYVISTA_JUPYTER_BACKEND must be static, {', '.join(LIVE_BACKENDS)}"
                              f", got {env!r}")
         return env
-    if not in_jupyter_kernel() or "google.colab" in sys.modules:
+    if not in_jupyter_kernel() or "google.colab" in sys.modules or _vscode_remote():
         return "static"
     try:
         import trame_pyvista  # noqa: F401
@@ -97,6 +98,16 @@ def jupyter_backend() -> str:
         except ImportError:  # the browser cannot reach the kernel's trame port
             return "static"
     return "client"
+
+
+def _vscode_remote() -> bool:
+    """A kernel started by VS Code (its environment markers) on another machine than the
+    editor: over SSH, in a dev container or a Codespace."""
+    env = os.environ
+    vscode = any(env.get(k) for k in ("VSCODE_PID", "VSCODE_CWD", "VSCODE_IPC_HOOK_CLI"))
+    remote = (env.get("CODESPACES", "").lower() == "true" or bool(env.get("REMOTE_CONTAINERS"))
+              or bool(env.get("SSH_CONNECTION")))
+    return vscode and remote
 
 
 def off_screen() -> bool:
@@ -169,6 +180,16 @@ def latest_on_gl_thread(handler: Callable[[T], None]) -> Callable[[T], None]:
             loop.add_callback(run)
 
     return observer
+
+
+def call_later(delay: float, fn: Callable[[], None]) -> None:
+    """Run ``fn()`` on the kernel's main loop (the GL thread) in ``delay`` seconds, without
+    blocking; outside a kernel there is no loop to run it (a RuntimeError says so)."""
+    loop = _kernel_loop()
+    if loop is None:
+        raise RuntimeError("playing needs a running Jupyter kernel; from code, set the frame "
+                           "slider's value (or pass call_later= to the player)")
+    loop.call_later(delay, fn)
 
 
 def png_bytes(image: np.ndarray, compress_level: int = 1) -> bytes:

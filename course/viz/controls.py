@@ -5,12 +5,13 @@ Every control is an object that displays itself in a notebook and also works fro
 (the 3D view; e.g. ``.scene.joint_positions``) and ``.widget`` (the whole layout). Setting a
 slider's ``.value`` from code runs the same update as dragging it, so tests and notebooks can
 drive them. Per event the math (FK, IK) runs once on small arrays and the views are updated in
-place; animation (``widgets.Play``) runs in the browser, so no cell ever blocks.
+place; clip playback is paced on the kernel's event loop (one picture at a time, see
+:mod:`course.viz.playback`), so no cell ever blocks.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import ipywidgets as widgets
@@ -135,7 +136,7 @@ class RotationExplorer(Control):
                                       description="order", layout=widgets.Layout(width="200px"))
         self.sliders = {f"angle{k}": _angle_slider(f"angle {k + 1}", v)
                         for k, v in enumerate(a_deg)}
-        self.readout = _readout(7)
+        self.readout = _readout(9)  # the matrix rows are taller than a line of text
         self.warning = _readout(4)  # reserved: the lock warning never moves the views
         self.scene = FrameScene(1, window_size=(380, 340))
         self.gimbal = GimbalFigure(order, np.radians(a_deg))
@@ -210,7 +211,8 @@ class SlerpExplorer(Control):
             "t": widgets.FloatSlider(value=t, min=0.0, max=1.0, step=0.01, description="t",
                                      **_slider_style(".2f")),
         }
-        self.readout = _readout(6, "420px")
+        # room for the table: a row per method, readable columns (the view is above it)
+        self.readout = _readout(6, "560px")
         self.scene = FrameScene(3, labels=["LERP", "NLERP", "SLERP"], window_size=(780, 330))
         self.q0, self.q1 = self._ends()
         self.arc = SlerpArcFigure(self.q0, self.q1, t=t)
@@ -252,15 +254,18 @@ class SlerpExplorer(Control):
             [norms[k] ** 2 * matrix_from_quat(v / norms[k]) for k, v in q.items()]
         )
         total = float(np.degrees(quat_angle(self.q0, q1)))
+        cell = "<td style='padding:1px 10px;text-align:right;white-space:nowrap'>"
         rows = "".join(
-            f"<tr><td><b>{k}</b></td><td>{_vec(v)}</td><td>{norms[k]:.3f}</td>"
-            f"<td>{np.degrees(quat_angle(self.q0, v / norms[k])):.1f}&deg;</td></tr>"
+            f"<tr><td style='padding:1px 10px 1px 0'><b>{k}</b></td>{cell}{_vec(v)}</td>"
+            f"{cell}{norms[k]:.3f}</td>"
+            f"{cell}{np.degrees(quat_angle(self.q0, v / norms[k])):.1f}&deg;</td></tr>"
             for k, v in q.items()
         )
+        head = "<th style='padding:1px 10px;text-align:right'>"
         self.readout.value = (
-            "<table style='font-family:monospace'><tr><th></th><th>q(t)</th><th>|q|</th>"
-            f"<th>angle from q0</th></tr>{rows}</table>"
-            f"t &middot; total angle = {t * total:.1f}&deg; (SLERP matches it)"
+            "<table style='font-family:monospace;border-collapse:collapse'><tr><th></th>"
+            f"{head}q(t) = (w, x, y, z)</th>{head}|q|</th>{head}angle from q0</th></tr>"
+            f"{rows}</table>t &middot; total angle = {t * total:.1f}&deg; (SLERP matches it)"
         )
 
 
@@ -401,19 +406,40 @@ def fk_explorer(skeleton: Any, local_rotations: ArrayLike | None = None,
 
 
 class BVHPlayer(Control):
-    """Play a clip: play/pause (``widgets.Play``, runs in the browser), frame slider, speed,
-    loop, camera. FK runs once for the whole clip; a frame change is a point update. The
-    root's path is drawn on the floor; ``curves`` (label -> ``(F,)`` angles in radians, e.g. a
-    knee's flexion) are plotted under the view with a cursor at the current frame."""
+    """Play a clip: play/pause, frame slider, speed, loop, camera. FK runs once for the whole
+    clip; a frame change is a point update. The root's path is drawn on the floor; ``curves``
+    (label -> ``(F,)`` angles in radians, e.g. a knee's flexion) are plotted under the view
+    with a cursor at the current frame.
+
+    Playback runs in the kernel, one picture at a time: the next frame is drawn only once the
+    last picture has been sent, and frames are skipped to keep the clip's speed at the rate
+    pictures are delivered (:class:`~course.viz.playback.PlaybackPacer`, at most
+    ``display_fps`` a second); the readout says which ("showing every 4th frame — 30 of 120
+    fps"). Pause stops it at once. ``clock`` and ``call_later(delay, fn)`` replace the
+    monotonic clock and the kernel's event loop (tests drive playback with fakes).
+    """
 
     def __init__(self, motion: Any, *, camera: str = "follow", display_fps: float = 30.0,
-                 curves: Mapping[str, ArrayLike] | None = None) -> None:
+                 curves: Mapping[str, ArrayLike] | None = None,
+                 clock: Callable[[], float] | None = None,
+                 call_later: Callable[[float, Callable[[], None]], Any] | None = None) -> None:
+        import time
+
+        from ._backend import call_later as kernel_call_later
+        from .playback import PlaybackPacer
+
         self.motion = motion
         self.positions, self.orientations = motion.forward_kinematics()
         n = self.positions.shape[0]
-        fps = 1.0 / motion.frame_time
-        self.play = widgets.Play(value=0, min=0, max=n - 1, step=1, repeat=True,
-                                 description="play")
+        self.pacer = PlaybackPacer(1.0 / motion.frame_time, max_pictures_per_s=display_fps)
+        self._clock = clock or time.monotonic
+        self._call_later = call_later or kernel_call_later
+        self.frame = 0
+        self._run = 0  # which press of play the pending picture belongs to
+        self.play = _fixed(widgets.ToggleButton(value=False, description="play", icon="play",
+                                                tooltip="play / pause",
+                                                layout=widgets.Layout(width="96px")))
+        self.play.add_class("course-play")
         self.sliders = {
             "frame": widgets.IntSlider(value=0, min=0, max=n - 1, description="frame",
                                        **_slider_style("d")),
@@ -424,9 +450,6 @@ class BVHPlayer(Control):
                                        value=camera, description="camera",
                                        layout=widgets.Layout(width="200px")),
         }
-        widgets.jslink((self.play, "value"), (self.sliders["frame"], "value"))
-        widgets.link((self.sliders["loop"], "value"), (self.play, "repeat"))
-        self._fps, self._display_fps = fps, display_fps
         self.readout = _readout(1)
         self.scene = SkeletonScene(window_size=(720, 480), camera="iso")
         self.scene.add_skeleton(motion.skeleton.parents, self.positions[0], name=motion.name
@@ -443,37 +466,77 @@ class BVHPlayer(Control):
             self.curves = JointAngleFigure(angles, motion.frame_time, list(curves),
                                            figsize=(7.2, 2.4))
             self.curves_image = widgets.Image(format="png", width=720)
-        _on_value(self.sliders["frame"], lambda c: self.show_frame(c["new"]))
-        _on_value(self.sliders["speed"], lambda _c: self._set_speed())
+        # playback sets the slider to the frame it shows: that is no new frame to draw
+        _on_value(self.sliders["frame"],
+                  lambda c: None if c["new"] == self.frame else self.show_frame(c["new"]))
+        _on_value(self.sliders["speed"], lambda c: setattr(self.pacer, "speed", c["new"]))
         _on_value(self.sliders["camera"], lambda c: self.scene.set_camera(c["new"], render=True))
-        self._set_speed()
+        _on_value(self.play, lambda c: self._play_toggled(c["new"]))
         row = widgets.HBox([self.play, self.sliders["frame"], self.sliders["speed"],
                             self.sliders["loop"], self.sliders["camera"]],
-                           layout=widgets.Layout(flex_flow="row wrap"))
+                           layout=widgets.Layout(flex_flow="row wrap", align_items="center"))
         self.widget = widgets.VBox([self.scene.widget(), row, self.readout,
                                     *([self.curves_image] if self.curves_image else [])])
         self.show_frame(0)
 
-    def _set_speed(self) -> None:
-        """Frames skipped so that the browser asks for about ``display_fps`` frames a second."""
-        rate = self._fps * self.sliders["speed"].value
-        self.play.step = max(1, int(round(rate / self._display_fps)))
-        self.play.interval = max(1, int(round(1000.0 * self.play.step / rate)))
+    @property
+    def playing(self) -> bool:
+        return bool(self.play.value)
+
+    def _play_toggled(self, playing: bool) -> None:
+        self.play.description = self.play.icon = "pause" if playing else "play"
+        if not playing:
+            self._show_readout()  # no skip to report while paused
+            return
+        if self.frame >= self.positions.shape[0] - 1 and not self.sliders["loop"].value:
+            self.show_frame(0)  # played to the end before: start again
+        self._run += 1  # a pause and play while a picture was pending: one chain, not two
+        run = self._run
+        self._call_later(0.0, lambda: self._tick(run))
+
+    def _tick(self, run: int) -> None:
+        """Show the next frame (the pause button is read here, so a pause stops at once)."""
+        if not self.playing or run != self._run:
+            return
+        frame = self.pacer.next_frame(self.frame, self.positions.shape[0],
+                                      self.sliders["loop"].value)
+        if frame is None:  # the end of a clip that does not loop
+            self.play.value = False
+            return
+        asked = self._clock()
+        self.show_frame(frame)
+        self.sliders["frame"].value = frame
+        self._when_sent(asked, run)
+
+    def _when_sent(self, asked: float, run: int) -> None:
+        """Wait (without blocking) until the picture has left the kernel, then measure its
+        cost and ask for the next one in time to keep the clip's speed."""
+        elapsed = self._clock() - asked
+        # (a view that never answers is not waited for forever)
+        if self.scene.pictures_in_flight() and elapsed < 1.0 and self.playing:
+            self._call_later(0.002, lambda: self._when_sent(asked, run))
+            return
+        self.pacer.delivered(elapsed)
+        self._call_later(max(0.0, self.pacer.interval - elapsed), lambda: self._tick(run))
 
     def show_frame(self, frame: int) -> None:
-        frame = int(frame)
-        self.scene.set_pose(self.positions[frame])
-        self.readout.value = (f"frame {frame} / {self.positions.shape[0] - 1}, "
-                              f"t = {frame * self.motion.frame_time:.3f} s")
+        self.frame = int(frame)
+        self.scene.set_pose(self.positions[self.frame])
+        self._show_readout()
         if self.curves is not None:
-            self.curves.set_frame(frame)
+            self.curves.set_frame(self.frame)
             self.curves_image.value = self.curves.png()
+
+    def _show_readout(self) -> None:
+        playing = f" &middot; {self.pacer.describe()}" if self.playing else ""
+        self.readout.value = (f"frame {self.frame} / {self.positions.shape[0] - 1}, "
+                              f"t = {self.frame * self.motion.frame_time:.3f} s{playing}")
 
 
 def bvh_player(motion: Any, *, camera: str = "follow",
-               curves: Mapping[str, ArrayLike] | None = None) -> BVHPlayer:
+               curves: Mapping[str, ArrayLike] | None = None, **kwargs: Any) -> BVHPlayer:
     """Play a :class:`course.motion.Motion`: see :class:`BVHPlayer`."""
-    return BVHPlayer(motion, camera=camera, curves=curves)
+    return BVHPlayer(motion, camera=camera, curves=curves, **kwargs)
 
 
 # -- inverse kinematics ------------------------------------------------------------------------
@@ -484,6 +547,25 @@ def _ik_methods() -> tuple[str, ...]:
     from course.ik.methods import METHODS
 
     return METHODS
+
+
+def _drag_pad(scene: SkeletonScene, center: ArrayLike, half: float, position: ArrayLike,
+              on_drag: Any) -> Any:
+    """A pad that drags the target in the plane the view's camera faces (views that take no
+    mouse: browser-rendered, static), see :mod:`course.viz.drag_pad`."""
+    from .drag_pad import ViewPlaneDrag
+
+    return ViewPlaneDrag(scene.plotter.camera, center, half, position, on_drag)
+
+
+def _pad_row(drag: Any) -> list[widgets.Widget]:
+    """The pad with a caption, for a control panel (nothing where the view takes the mouse)."""
+    if drag is None:
+        return []
+    caption = widgets.HTML("drag the target in the view's plane:",
+                           layout=widgets.Layout(margin="4px 0 2px 84px"))
+    drag.pad.layout = widgets.Layout(margin="0 0 6px 84px", flex="0 0 auto")
+    return [caption, drag.pad]
 
 
 class IKPlayground(Control):
@@ -546,15 +628,20 @@ class IKPlayground(Control):
         self.convergence_image = widgets.Image(format="png", width=420)
         self._solving = False
         self._dragging = False
-        # where the view takes the mouse (trame), the target is also a sphere to drag
+        # where the view takes the mouse (trame), the target is also a sphere to drag;
+        # elsewhere a pad drags it in the plane the camera faces
         self.handle = (self.scene.add_target_handle(goal, self._dragged)
                        if self.scene.draggable else None)
+        self.drag = None if self.handle is not None else _drag_pad(
+            self.scene, center, reach, goal, self._dragged)
         for name in ("x", "y", "z"):
             _on_value(self.sliders[name], lambda _c: self._slider_moved())
         for name in ("method", "tol", "max_iter"):
             _on_value(self.sliders[name], lambda _c: self.solve())
         _on_value(self.sliders["iteration"], lambda c: self.show_iteration(c["new"]))
-        left = widgets.VBox([*self.sliders.values(), self.readout, self.convergence_image])
+        sliders = list(self.sliders.values())
+        left = widgets.VBox([*sliders[:3], *_pad_row(self.drag), *sliders[3:], self.readout,
+                             self.convergence_image])
         self.widget = _side_by_side(left, self.scene.widget())
         self.solve()
 
@@ -565,6 +652,8 @@ class IKPlayground(Control):
     def _slider_moved(self) -> None:
         if not self._dragging:
             self.scene.move_target_handle(self.target)
+            if self.drag is not None:
+                self.drag.show(self.target)
             self.solve()
 
     def _dragged(self, position: Array) -> None:
@@ -629,6 +718,8 @@ class IKPlayground(Control):
             f"<b>{r.iterations}</b> iterations<br>residual at iteration {k}: "
             f"<b>{residual[min(k, residual.size - 1)]:.2e}</b> "
             f"(final {residual[-1]:.2e})"
+            + ("<br>started bent evenly: the target is near full reach" if r.start == "reach"
+               else "")
         )
 
 
@@ -688,14 +779,18 @@ class FullBodyIK(Control):
         self._editing = False
         self.handle = (self.scene.add_target_handle(self.targets[effectors[0]], self._dragged)
                        if self.scene.draggable else None)
+        self.drag = None if self.handle is not None else _drag_pad(
+            self.scene, box.mean(axis=0), float(np.ptp(box, axis=0).max()) / 2,
+            self.targets[effectors[0]], self._dragged)
         _on_value(self.sliders["effectors"], lambda _c: self._effectors_changed())
         _on_value(self.sliders["edit"], lambda _c: self._load_target())
         for k in ("root", "method"):
             _on_value(self.sliders[k], lambda _c: self.solve())
         for c in "xyz":
             _on_value(self.sliders[c], lambda _c: self._target_moved())
-        self.widget = _side_by_side(widgets.VBox([*self.sliders.values(), self.readout]),
-                                    self.scene.widget())
+        self.widget = _side_by_side(
+            widgets.VBox([*self.sliders.values(), *_pad_row(self.drag), self.readout]),
+            self.scene.widget())
         self._load_target()
 
     def _effectors_changed(self) -> None:
@@ -712,7 +807,7 @@ class FullBodyIK(Control):
             rel = self.targets[name] - self.root_position
             for k, c in enumerate("xyz"):
                 self.sliders[c].value = float(rel[k])
-            self.scene.move_target_handle(self.targets[name])
+            self._show_target(self.targets[name])
         self._editing = False
         self.solve()
 
@@ -721,8 +816,14 @@ class FullBodyIK(Control):
         if self._editing or name is None:
             return
         self._take_target(name)
-        self.scene.move_target_handle(self.targets[name])
+        self._show_target(self.targets[name])
         self.solve()
+
+    def _show_target(self, position: Array) -> None:
+        """The drag handle or the pad's dot follows a target set otherwise."""
+        self.scene.move_target_handle(position)
+        if self.drag is not None:
+            self.drag.show(position)
 
     def _take_target(self, name: str) -> None:
         """The edited effector's target from the x/y/z sliders (relative to the root)."""

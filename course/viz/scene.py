@@ -202,6 +202,7 @@ class SkeletonScene:
         self.plotter = _new_plotter(window_size)
         self._in_browser = self.backend == "client"
         self._browser_views: list[Any] = []  # the vtk.js views showing this scene
+        self._live_servers: list[Any] = []  # the trame servers of live views
         self._camera_moved = False
         self._legend: Any = None  # an HTML legend above a view rendered in the browser
         self.skeletons: dict[str, SkeletonActors] = {}
@@ -211,6 +212,7 @@ class SkeletonScene:
         self._center = np.zeros(3)
         self._radius = 1.0
         self._fit_points: Array | None = None  # framed by projection (else by a sphere)
+        self._envelope: Array | None = None  # a clip's poses about their root (follow camera)
         self._sphere = False  # framing a sphere of reach
         self._camera = camera
         self._follow: tuple[str, Array] | None = None  # (skeleton, root position at last move)
@@ -247,7 +249,9 @@ class SkeletonScene:
             no skeleton of the scene uses yet (a :data:`GHOST` beside it leaves blue first).
         axes : draw each joint's local frame (x red, y green, z blue).
         frame_points : (..., 3) points the camera and floor must cover (e.g. a whole clip);
-            default: this pose. Only the first skeleton sets the framing.
+            default: this pose. Only the first skeleton sets the framing. A clip's frames
+            ``(F, N, 3)`` whose point 0 is the root: the ``follow`` camera frames their
+            largest extent about the root (every pose fills the view as it walks).
         reach : frame the whole sphere of this radius about the root as well (a chain that
             can turn anywhere: sliders never take it out of view).
         """
@@ -261,8 +265,13 @@ class SkeletonScene:
         bone_color, joint_color = color or next(
             (c for c in PALETTE if c[0] not in used), PALETTE[len(self.skeletons) % len(PALETTE)])
         if not self.skeletons:
-            pts = (pos if frame_points is None
-                   else np.asarray(frame_points, np.float64).reshape(-1, 3))
+            clip = None if frame_points is None else np.asarray(frame_points, np.float64)
+            if clip is not None and clip.ndim == 3:
+                # whole frames (a stride over all points could skip a joint in every frame)
+                clip = clip[:: max(1, clip.shape[0] * clip.shape[1] // 4000)]
+                # about each frame's root, on the floor
+                self._envelope = (clip - clip[:, :1] * [1.0, 0.0, 1.0]).reshape(-1, 3)
+            pts = pos if clip is None else clip.reshape(-1, 3)
             if reach is not None:  # the sphere's six extremes
                 extremes = pos[0] + reach * np.concatenate([np.eye(3), -np.eye(3)])
                 pts = np.concatenate([pts, extremes])
@@ -299,6 +308,8 @@ class SkeletonScene:
         self.skeletons[name] = skel
         if triads is not None:
             self._set_triads(skel, pos, orientations)
+        if len(self.skeletons) == 1 and self._camera == "follow":  # now it has a root to follow
+            self.set_camera("follow")
         self._update_legend()
         return skel
 
@@ -541,9 +552,13 @@ class SkeletonScene:
             focal, distance = self._fit_view(d, np.asarray(up, dtype=np.float64))
         if preset == "follow" and self.skeletons:
             root = self.skeleton().positions[0]
-            focal = np.array([root[0], self._center[1], root[2]])
             self._follow = (self.skeleton().name, root.copy())
-            distance = 1.15 * 0.6 * self._scale / np.tan(np.radians(15.0))
+            if self._envelope is not None:  # the clip's largest pose, where the root is now
+                focal, distance = self._fit_view(d, np.asarray(up, dtype=np.float64),
+                                                 self._envelope + root * [1.0, 0.0, 1.0])
+            else:
+                focal = np.array([root[0], self._center[1], root[2]])
+                distance = 1.15 * 0.6 * self._scale / np.tan(np.radians(15.0))
         else:
             self._follow = None
         camera.focal_point = tuple(focal)
@@ -556,14 +571,15 @@ class SkeletonScene:
         if render:
             self.render()
 
-    def _fit_view(self, d: Array, up: Array) -> tuple[Array, float]:
-        """Focal point and distance along ``d`` at which every framing point, with its joint
-        sphere, is in view (perspective, 30 degrees vertically, the window's aspect, a 10%
-        margin)."""
+    def _fit_view(self, d: Array, up: Array, points: Array | None = None
+                  ) -> tuple[Array, float]:
+        """Focal point and distance along ``d`` at which every framing point (or every one of
+        ``points (N, 3)``), with its joint sphere, is in view (perspective, 30 degrees
+        vertically, the window's aspect, a 10% margin)."""
         right = np.cross(up, d)
         right /= np.linalg.norm(right)
         true_up = np.cross(d, right)
-        rel = self._fit_points - self._center
+        rel = (self._fit_points if points is None else points) - self._center
         x, y, z = rel @ right, rel @ true_up, rel @ d  # z: towards the camera
         focal = self._center + right * (x.max() + x.min()) / 2 + true_up * (y.max() + y.min()) / 2
         pad = 0.03 * self._scale  # a joint sphere's radius and a little more
@@ -678,6 +694,9 @@ class SkeletonScene:
             )
         print("".join(line for line in out.getvalue().splitlines(keepends=True)
                       if not line.startswith("Using wasm_dir:")), end="")
+        server = getattr(getattr(view, "viewer", None), "server", None)
+        if server is not None:
+            self._live_servers.append(server)
         for local_view in getattr(getattr(view, "viewer", None), "views", ()):
             if _send_changes_only(local_view):
                 self._browser_views.append(local_view)
@@ -687,6 +706,13 @@ class SkeletonScene:
         view.layout.min_width = "320px"
         view.layout.flex = "0 1 auto"
         return view
+
+    def pictures_in_flight(self) -> int:
+        """Messages to this scene's live views (trame's websocket) not yet handed to the
+        network: the last picture is delivered once this is 0. Always 0 for a static image,
+        which travels with its widget's own message."""
+        return sum(getattr(getattr(getattr(s, "context", None), "network_monitor", None),
+                           "pending", 0) for s in self._live_servers)
 
     def show(self) -> None:
         """Display the view: in a notebook as :meth:`widget`, else in a window (blocking)."""
@@ -786,6 +812,7 @@ class FrameScene:
         self.backend = "server" if jupyter_backend() == "client" else jupyter_backend()
         self._in_browser = False
         self._browser_views: list[Any] = []
+        self._live_servers: list[Any] = []
         self._camera_moved = False
         size = window_size or (max(420, 300 * n_frames), 380)
         self.plotter = _new_plotter(size)
@@ -848,5 +875,6 @@ class FrameScene:
     project = SkeletonScene.project
     widget = SkeletonScene.widget
     _trame_view = SkeletonScene._trame_view
+    pictures_in_flight = SkeletonScene.pictures_in_flight
     show = SkeletonScene.show
     close = SkeletonScene.close

@@ -1,8 +1,9 @@
 """JupyterLab in headless Chromium: run the notebook, drag a slider, see the numbers and the
 3D view change, and the kernel stay alive: with the static image view that CI executes, the
 browser-rendered (vtk.js) view a student gets by default, and the server-rendered trame view
-in which the IK target is a sphere to drag. Screenshots go to test-artifacts/. Needs the
-Debian package `chromium`."""
+in which the IK target is a sphere to drag; in the browser-rendered view the target is dragged
+on a pad in the view's plane instead. Screenshots go to test-artifacts/. Needs the Debian
+package `chromium`."""
 
 from __future__ import annotations
 
@@ -140,3 +141,37 @@ def test_dragging_the_target_sphere_solves_ik_again(lab):
         alive = _kernel_alive(page)
     assert alive, "the kernel died while the target was dragged"
     assert after != before, "dragging the sphere did not move the target sliders"
+
+
+@pytest.mark.parametrize("lab", ["client"], indirect=True)
+def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
+    """vtk.js sends no picks to the kernel: the pad beside the view drags the target."""
+    base, _ = lab
+    with _notebook_page(base, DRAG_NOTEBOOK, "e2e_pad") as page:
+        dot = page.locator(".course-drag-pad .course-drag-dot")
+        dot.wait_for(state="visible", timeout=60_000)
+        view = page.locator("iframe").first
+        view.wait_for(state="visible", timeout=60_000)
+        dot.scroll_into_view_if_needed()
+        page.wait_for_timeout(5000)  # the view's first frame
+        readouts = page.locator(".widget-slider .widget-readout")
+        before = [readouts.nth(k).inner_text() for k in range(3)]
+        image_before = view.screenshot(path=str(ARTIFACTS / "e2e_pad_before.png"))
+        # (the screenshot scrolled to the view; hovering brings the mouse back to the page)
+        dot.hover()
+        page.mouse.down()
+        pad = page.locator(".course-drag-pad svg").first.bounding_box()
+        page.mouse.move(pad["x"] + 0.25 * pad["width"], pad["y"] + 0.3 * pad["height"],
+                        steps=10)
+        page.mouse.up()
+        page.wait_for_function(
+            "([t]) => [...document.querySelectorAll('.widget-slider .widget-readout')]"
+            ".slice(0, 3).map(e => e.innerText).join() !== t", arg=[",".join(before)],
+            timeout=20_000)
+        page.wait_for_timeout(3000)
+        after = [readouts.nth(k).inner_text() for k in range(3)]
+        image_after = view.screenshot(path=str(ARTIFACTS / "e2e_pad_after.png"))
+        alive = _kernel_alive(page)
+    assert alive, "the kernel died while the target was dragged"
+    assert after != before, "dragging the pad did not move the target sliders"
+    assert image_after != image_before, "the 3D view did not change"

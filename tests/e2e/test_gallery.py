@@ -11,8 +11,13 @@ interactive view (``.course-view``) at 1366x768 and again at 1920x1080:
   of its shorter side;
 
 then the first slider of the view is moved to both ends (Home, End) and all of it is checked
-again. Every screenshot goes into ``tests/e2e/artifacts/gallery.html``, one page to scan.
-Notebooks run a few at a time in one browser.
+again. A gimbal explorer (01) is also set to Y = 90 degrees: the lock warning shows, and the
+view, the rings picture and the controls stay inside the output where they were. Some shots
+must exist (``REQUIRED``: 04's pole scene at both ends of its slider, the a2 walk at its first
+and last frame), so a view that stops answering its slider cannot drop out unnoticed. Every
+screenshot goes into ``tests/e2e/artifacts/gallery.html``, one page to scan. Notebooks run a
+few at a time in one browser; ``GALLERY_ONLY=01_,a2`` runs those whose path contains one of
+the comma-separated parts (a quick look at what you changed).
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ import asyncio
 import html
 import io
 import os
+import re
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,10 +36,19 @@ import pytest
 from labkit import ALL_RUN, FRAME_PROBE, KERNEL_IDLE, REPO, RUN_ALL, TOKEN, chromium, lab_server
 
 ARTIFACTS = Path(__file__).resolve().parent / "artifacts"
+ONLY = [part for part in os.environ.get("GALLERY_ONLY", "").split(",") if part]
 NOTEBOOKS = sorted(
+    nb for nb in
     [p.relative_to(REPO).as_posix() for p in (REPO / "notebooks").glob("[0-9]*.ipynb")]
     + [p.relative_to(REPO).as_posix() for p in (REPO / "assignments").glob("*.ipynb")]
+    if not ONLY or any(part in nb for part in ONLY)
 )
+# shots that must be taken (prefixes of a shot's state), by notebook
+REQUIRED = {
+    "notebooks/01_rotations.ipynb": ("Y=90",),
+    "notebooks/04_two_link_ik.ipynb": ("min (pole angle", "max (pole angle"),
+    "assignments/a2_forward_kinematics.ipynb": ("min (frame", "max (frame"),
+}
 SIZES = ((1366, 768), (1920, 1080))
 PARALLEL = int(os.environ.get("GALLERY_PARALLEL", "3"))
 SETTLE_S = 2.0  # after a change: the kernel answers, the browser draws
@@ -142,24 +157,79 @@ async def _shoot(page, view, shots: list[Shot], notebook: str, size, k: int,
     if state == "start":
         await _first_picture(view)
     output = view.locator("xpath=ancestor::div[contains(@class, 'jp-OutputArea-output')][1]")
-    name = f"{notebook.replace('/', '_').removesuffix('.ipynb')}_{size[0]}_v{k}_{state}.png"
+    slug = re.sub(r"[^A-Za-z0-9=]+", "_", state).strip("_")
+    name = f"{notebook.replace('/', '_').removesuffix('.ipynb')}_{size[0]}_v{k}_{slug}.png"
     await output.screenshot(path=str(ARTIFACTS / name))
     problems = _check_geometry(await view.evaluate(GEOMETRY))
     problems += _check_picture(await view.screenshot())
     shots.append(Shot(notebook, size, k, state, name, problems))
 
 
-async def _slider_end(page, view, key: str) -> bool:
+async def _slider_end(page, view, key: str) -> str | None:
+    """Press ``key`` on the output's first slider; its label, or None when it has none."""
     output = view.locator("xpath=ancestor::div[contains(@class, 'jp-OutputArea-output')][1]")
-    handles = output.locator(".widget-slider .noUi-handle")
-    if await handles.count() == 0:
-        return False
-    handle = handles.first
+    sliders = output.locator(".widget-slider")
+    if await sliders.count() == 0:
+        return None
+    handle = sliders.first.locator(".noUi-handle")
     if not await handle.is_visible():
-        return False
+        return None
     await handle.focus()
     await page.keyboard.press(key)
-    return True
+    return (await sliders.first.locator(".widget-label").inner_text()).strip()
+
+
+async def _type_into_slider(page, slider, value: str) -> None:
+    """Type ``value`` into a slider's editable readout (what a student can do too)."""
+    readout = slider.locator(".widget-readout")
+    await readout.click()
+    await page.keyboard.press("Control+A")
+    await page.keyboard.type(value)
+    await page.keyboard.press("Enter")
+
+
+# where the view, the rings picture and the warning are, from the DOM
+BOXES = """(view) => {
+  const out = view.closest('.jp-OutputArea-output');
+  const r = (e) => { const b = e.getBoundingClientRect();
+    return [b.left, b.top, b.width, b.height].map(Math.round); };
+  const rings = [...out.querySelectorAll('.widget-image')].filter(e => !e.closest('.course-view'));
+  const warning = [...out.querySelectorAll('.widget-html')].find(
+    e => e.innerText.includes('Gimbal lock'));
+  return {view: r(view), rings: rings.map(r), warning: warning ? r(warning) : null,
+          out: r(out), ringsLoaded: rings.every(e => e.naturalWidth > 0)};
+}"""
+
+
+async def _gimbal_lock(page, view, shots: list[Shot], notebook: str, size, k: int) -> None:
+    """A gimbal explorer (a slider "Y (#2)" and a rings picture) at Y = 90 degrees: the
+    warning shows; the view, the rings and the controls stay inside the output, unmoved."""
+    output = view.locator("xpath=ancestor::div[contains(@class, 'jp-OutputArea-output')][1]")
+    slider = output.locator(".widget-slider").filter(
+        has=page.locator(".widget-label", has_text="(#2)"))
+    if await slider.count() == 0:
+        return
+    slider = slider.first
+    start = (await slider.locator(".widget-readout").inner_text()).strip()
+    before = await view.evaluate(BOXES)
+    await _type_into_slider(page, slider, "90")
+    await _wait_settled(page)
+    await _shoot(page, view, shots, notebook, size, k, "Y=90")
+    after = await view.evaluate(BOXES)
+    problems = shots[-1].problems
+    if after["warning"] is None:
+        problems.append("no gimbal-lock warning at Y = 90")
+    if not after["rings"] or not after["ringsLoaded"]:
+        problems.append("the rings picture is not shown")
+    for name in ("view", "rings"):
+        if before[name] != after[name]:
+            problems.append(f"the {name} moved at Y = 90: {before[name]} -> {after[name]}")
+    out = after["out"]
+    for box in [*after["rings"], *([after["warning"]] if after["warning"] else [])]:
+        if box[0] < out[0] - 1 or box[0] + box[2] > out[0] + out[2] + 1:
+            problems.append(f"the rings or the warning {box} leave the output {out}")
+    await _type_into_slider(page, slider, start)  # back to the start for the next size
+    await _wait_settled(page, 1.0)
 
 
 async def _gallery_of(browser, base: str, notebook: str) -> list[Shot]:
@@ -199,15 +269,22 @@ async def _gallery_of(browser, base: str, notebook: str) -> list[Shot]:
             for k in range(n):
                 view = views.nth(k)
                 await _shoot(page, view, shots, notebook, size, k, "start")
+                await _gimbal_lock(page, view, shots, notebook, size, k)
                 if size != SIZES[0]:
                     continue  # the slider's ends once, at the small size (where it is tight)
                 for key, state in (("Home", "min"), ("End", "max")):
-                    if not await _slider_end(page, view, key):
+                    label = await _slider_end(page, view, key)
+                    if label is None:
                         break
                     await _wait_settled(page)
-                    await _shoot(page, view, shots, notebook, size, k, state)
+                    await _shoot(page, view, shots, notebook, size, k, f"{state} ({label})")
                 if await _slider_end(page, view, "Home"):  # back to a start for the big size
                     await _wait_settled(page, 1.0)
+        missing = [s for s in REQUIRED.get(notebook, ())
+                   if not any(shot.state.startswith(s) for shot in shots)]
+        if missing:
+            shots.append(Shot(notebook, SIZES[0], -1, "required", "", [
+                f"no shot of {', '.join(missing)} (is the view or its slider gone?)"]))
     except Exception as exc:  # recorded, so one notebook does not hide the others
         name = f"{notebook.replace('/', '_').removesuffix('.ipynb')}_failure.png"
         try:

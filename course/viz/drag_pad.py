@@ -1,0 +1,136 @@
+"""A drag pad: move an IK target with the mouse where the 3D view cannot send the mouse back.
+
+The browser-rendered view (vtk.js) and the static image send no picks to the kernel, so
+their target cannot be dragged in 3D. The pad is a square in the plane that faces the
+view's camera: dragging its red dot moves the target along the camera's right and up
+axes, ``p = c + h (u r + v s) + ((p_0 - c) . d) d``, keeping its depth ``d``. It is an
+anywidget (a few lines of JavaScript), so it works wherever ipywidgets do: JupyterLab,
+Notebook, VS Code, Colab.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import anywidget
+import numpy as np
+import traitlets
+from numpy.typing import ArrayLike
+
+from .._typing import Array
+
+_ESM = r"""
+function render({ model, el }) {
+  const size = model.get("size");
+  const ns = "http://www.w3.org/2000/svg";
+  const svg = document.createElementNS(ns, "svg");
+  svg.setAttribute("width", size);
+  svg.setAttribute("height", size);
+  svg.style.cssText = "background:#f4f6fa;border:1px solid #c9d3e3;border-radius:4px;" +
+    "cursor:crosshair;touch-action:none;display:block";
+  for (const [x1, y1, x2, y2] of [[size / 2, 0, size / 2, size], [0, size / 2, size, size / 2]]) {
+    const line = document.createElementNS(ns, "line");
+    const attributes = { x1, y1, x2, y2, stroke: "#d5dae0" };
+    Object.entries(attributes).forEach(([k, v]) => line.setAttribute(k, v));
+    svg.appendChild(line);
+  }
+  const dot = document.createElementNS(ns, "circle");
+  dot.setAttribute("r", 9);
+  dot.setAttribute("fill", "#e5484d");
+  dot.setAttribute("class", "course-drag-dot");
+  svg.appendChild(dot);
+  const place = () => {
+    const [u, v] = model.get("uv");
+    dot.setAttribute("cx", (u + 1) / 2 * size);
+    dot.setAttribute("cy", (1 - v) / 2 * size);
+  };
+  let dragging = false, pending = null;
+  const clip = (x) => Math.max(-1, Math.min(1, x));
+  const send = () => {  // at most one message per animation frame
+    if (pending) { model.set("uv", pending); model.save_changes(); pending = null; }
+  };
+  const move = (e) => {
+    const box = svg.getBoundingClientRect();
+    const uv = [clip((e.clientX - box.left) / box.width * 2 - 1),
+                clip(1 - (e.clientY - box.top) / box.height * 2)];
+    dot.setAttribute("cx", (uv[0] + 1) / 2 * size);
+    dot.setAttribute("cy", (1 - uv[1]) / 2 * size);
+    if (!pending) requestAnimationFrame(send);
+    pending = uv;
+  };
+  svg.addEventListener("pointerdown", (e) => {
+    dragging = true; svg.setPointerCapture(e.pointerId); move(e);
+  });
+  svg.addEventListener("pointermove", (e) => { if (dragging) move(e); });
+  svg.addEventListener("pointerup", () => { dragging = false; });
+  model.on("change:uv", () => { if (!dragging) place(); });
+  place();
+  el.appendChild(svg);
+}
+export default { render };
+"""
+
+
+class DragPad(anywidget.AnyWidget):
+    """The square pad; ``uv`` is the dot in ``[-1, 1]^2`` (right, up)."""
+
+    _esm = _ESM
+    uv = traitlets.List(traitlets.Float(), default_value=[0.0, 0.0]).tag(sync=True)
+    size = traitlets.Int(180).tag(sync=True)
+
+
+class ViewPlaneDrag:
+    """Map a :class:`DragPad` to target positions in the plane facing ``camera``.
+
+    Parameters
+    ----------
+    camera : a pyvista camera (its position, focal point and up at this moment).
+    center : (3,) the point under the pad's centre (e.g. the middle of the target's range).
+    half : half the pad's side in world units.
+    position : (3,) the target now.
+    on_drag : called with each new target position ``(3,)`` while the dot is dragged.
+    """
+
+    def __init__(self, camera: Any, center: ArrayLike, half: float, position: ArrayLike,
+                 on_drag: Callable[[Array], None], *, size: int = 180) -> None:
+        from ._backend import latest_on_gl_thread
+
+        if not half > 0:
+            raise ValueError(f"half must be positive, got {half!r}")
+        d = np.subtract(camera.position, camera.focal_point)
+        self.depth_axis = d / np.linalg.norm(d)  # towards the camera
+        right = np.cross(camera.up, self.depth_axis)
+        self.right = right / np.linalg.norm(right)
+        self.up = np.cross(self.depth_axis, self.right)
+        self.center = np.asarray(center, dtype=np.float64).reshape(3)
+        self.half = float(half)
+        self._depth = 0.0
+        self._quiet = False
+        self.pad = DragPad(size=size)
+        self.pad.add_class("course-drag-pad")
+        self.show(position)
+        self._on_drag = on_drag
+        self.pad.observe(latest_on_gl_thread(self._moved), names="uv")
+
+    def position(self, uv: ArrayLike) -> Array:
+        """The target at pad point ``uv (2,)``: in the view plane, at the kept depth."""
+        u, v = np.clip(np.asarray(uv, dtype=np.float64).reshape(2), -1.0, 1.0)
+        p: Array = (self.center + self.half * (u * self.right + v * self.up)
+                    + self._depth * self.depth_axis)
+        return p
+
+    def show(self, position: ArrayLike) -> None:
+        """Put the dot where ``position (3,)`` lies (clipped to the pad); keep its depth."""
+        rel = np.asarray(position, dtype=np.float64).reshape(3) - self.center
+        self._depth = float(rel @ self.depth_axis)
+        uv = np.clip([rel @ self.right / self.half, rel @ self.up / self.half], -1.0, 1.0)
+        self._quiet = True
+        try:
+            self.pad.uv = [float(uv[0]), float(uv[1])]
+        finally:
+            self._quiet = False
+
+    def _moved(self, change: dict[str, Any]) -> None:
+        if not self._quiet:
+            self._on_drag(self.position(change["new"]))
