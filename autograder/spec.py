@@ -85,6 +85,20 @@ class Test:
     bonus: bool = False
 
 
+#: a test's case generator: the cases drawn from a seeded generator
+Cases = Callable[[np.random.Generator], Sequence[Case]]
+
+
+def random_edge_hidden(fn: str, random: Cases, edges: Cases, hidden: Cases,
+                       points: tuple[float, float, float] = (1.0, 1.0, 2.0)
+                       ) -> tuple[Test, Test, Test]:
+    """A function's usual three tests: seeded random cases, edge cases, and hidden cases drawn
+    from the secret seed, worth ``points`` in that order."""
+    return (Test(f"{fn}: random cases", fn, points[0], random),
+            Test(f"{fn}: edge cases", fn, points[1], edges),
+            Test(f"{fn}: hidden cases", fn, points[2], hidden, hidden=True))
+
+
 @dataclass(frozen=True)
 class Misconception:
     """A known-wrong way to implement ``function``.

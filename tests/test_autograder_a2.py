@@ -4,68 +4,16 @@ hostile work), each getting the right score and a specific message."""
 
 from __future__ import annotations
 
-import re
-from pathlib import Path
-
 import numpy as np
 import pytest
+from grading_fixtures import FIXTURES, LIMITS, fixture_submission, seed, visible_cases
 
-from autograder import Limits, check
+from autograder import check
 from autograder.assignments import load
-from autograder.results import Result
 from autograder.spec import case_rng
 
-FIXTURES = Path(__file__).parent / "fixtures"
-ASSIGNMENTS = Path(__file__).parents[1] / "assignments"
-LIMITS = Limits(cpu_seconds=8, memory_mb=600, load_timeout=5.0, case_timeout=1.0)
-SEED = "fixture-seed-a2"
+SEED = seed("a2")
 A2 = load("a2")
-
-
-def fixture_submission(key: str, name: str, tmp_path: Path) -> Path:
-    """A fixture as a file; ``# extends: reference.py`` fixtures are appended to it."""
-    folder = FIXTURES / key
-    src = (folder / name).read_text()
-    if src.startswith("# extends: reference.py"):
-        src = (folder / "reference.py").read_text() + "\n\n" + src
-    path = tmp_path / f"{key}_submission.py"
-    path.write_text(src)
-    return path
-
-
-def expectation(key: str, name: str) -> tuple[str, str]:
-    """``(function, misconception key)`` from a mutant's ``# expect:`` line."""
-    found = re.search(r"# expect: (\S+)", (FIXTURES / key / name).read_text())
-    assert found, name
-    fn, mistake = found.group(1).split(":")
-    return fn, mistake
-
-
-def assert_diagnosed(result: Result, fn: str, key: str) -> None:
-    """Every failing test of ``fn`` names the mistake, the report says it, and only ``fn``
-    (and functions that call it) lost points."""
-    failing = [t for t in result.tests if t.status != "passed"]
-    own = [t for t in failing if t.test.function == fn]
-    assert own and all(t.misconception and t.misconception.key == key for t in own)
-    title = own[0].misconception.title
-    assert f"Likely mistake, {title}" in " ".join(str(result).split())
-    assert all(t.test.function in (fn, "trace_curve") for t in failing)
-
-
-def assert_catalogue_matches_fixtures(assignment, key: str) -> None:
-    """Every mistake of the assignment's own catalogue has a mutant, every mutant names a
-    catalogued mistake, and each shared mistake that can show here has at least one mutant."""
-    mutants = sorted(p.name for p in (FIXTURES / key).glob("mutant_*.py"))
-    expected = {":".join(expectation(key, m)) for m in mutants}
-    own = {f"{m.function}:{m.key}" for m in assignment.misconceptions}
-    assert own <= expected <= {f"{m.function}:{m.key}" for m in assignment.catalogue}
-    shared = {m.key for m in assignment.shared}
-    assert shared <= {e.split(":")[1] for e in expected}
-
-
-def visible_cases(assignment, fn: str):
-    tests = [t for t in assignment.tests if t.function == fn and not t.hidden]
-    return [c for t in tests for c in t.cases(case_rng(t, None))]
 
 
 # --- the references and the cases --------------------------------------------------------------
@@ -159,30 +107,6 @@ def test_every_catalogued_mistake_differs_from_the_reference():
 
 
 # --- fixture submissions -----------------------------------------------------------------------
-
-
-def test_reference_gets_full_marks_and_the_bonus():
-    result = check("a2", FIXTURES / "a2" / "reference.py", seed=SEED, limits=LIMITS)
-    assert result.max_score == 11 and result.score == 13 and result.bonus_score == 2
-    assert "Score: 13 / 11 (all tests, including 2 bonus points)" in str(result)
-
-
-def test_template_is_not_implemented_yet(monkeypatch):
-    monkeypatch.delenv("AUTOGRADER_SEED", raising=False)
-    result = check("a2", ASSIGNMENTS / "a2_forward_kinematics.py", limits=LIMITS)
-    assert result.score == 0 and {t.status for t in result.tests} == {"not_implemented"}
-
-
-def test_catalogue_covers_every_mutant():
-    assert_catalogue_matches_fixtures(A2, "a2")
-    assert len(A2.misconceptions) >= 8
-
-
-@pytest.mark.parametrize("name", sorted(p.name for p in (FIXTURES / "a2").glob("mutant_*.py")))
-def test_mutant_is_diagnosed_by_name(name, tmp_path):
-    fn, key = expectation("a2", name)
-    result = check("a2", fixture_submission("a2", name, tmp_path), seed=SEED, limits=LIMITS)
-    assert_diagnosed(result, fn, key)
 
 
 def test_pose_assuming_positions_first_gets_partial_bonus(tmp_path):

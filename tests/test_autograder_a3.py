@@ -4,26 +4,15 @@ hostile work). IK answers are judged by what they achieve, never by one referenc
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
-from test_autograder_a2 import (
-    assert_catalogue_matches_fixtures,
-    assert_diagnosed,
-    expectation,
-    fixture_submission,
-    visible_cases,
-)
+from grading_fixtures import LIMITS, fixture_submission, seed, visible_cases
 
-from autograder import Limits, check
+from autograder import check
 from autograder.assignments import load
 from autograder.assignments.a3 import bones, chain_problems, random_chain, two_link_problems
 
-FIXTURES = Path(__file__).parent / "fixtures" / "a3"
-TEMPLATE = Path(__file__).parents[1] / "assignments" / "a3_inverse_kinematics.py"
-LIMITS = Limits(cpu_seconds=8, memory_mb=600, load_timeout=5.0, case_timeout=1.0)
-SEED = "fixture-seed-a3"
+SEED = seed("a3")
 A3 = load("a3")
 
 
@@ -109,28 +98,6 @@ def test_symptoms_never_fire_on_right_answers_and_wrong_answers_differ():
 
 
 # --- fixture submissions -----------------------------------------------------------------------
-
-
-def test_reference_gets_full_marks_and_the_bonus():
-    result = check("a3", FIXTURES / "reference.py", seed=SEED, limits=LIMITS)
-    assert result.max_score == 18 and result.score == 20
-
-
-def test_template_is_not_implemented_yet(monkeypatch):
-    monkeypatch.delenv("AUTOGRADER_SEED", raising=False)
-    result = check("a3", TEMPLATE, limits=LIMITS)
-    assert result.score == 0 and {t.status for t in result.tests} == {"not_implemented"}
-
-
-def test_catalogue_covers_every_mutant():
-    assert_catalogue_matches_fixtures(A3, "a3")
-
-
-@pytest.mark.parametrize("name", sorted(p.name for p in FIXTURES.glob("mutant_*.py")))
-def test_mutant_is_diagnosed_by_name(name, tmp_path):
-    fn, key = expectation("a3", name)
-    result = check("a3", fixture_submission("a3", name, tmp_path), seed=SEED, limits=LIMITS)
-    assert_diagnosed(result, fn, key)
 
 
 def test_a_solver_ignoring_max_iter_loses_the_cases_it_cannot_finish(tmp_path):

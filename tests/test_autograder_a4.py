@@ -4,18 +4,10 @@ hostile work). IK answers are judged by forward kinematics and constraints, neve
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
-import pytest
-from test_autograder_a2 import (
-    assert_catalogue_matches_fixtures,
-    expectation,
-    fixture_submission,
-    visible_cases,
-)
+from grading_fixtures import ASSIGNMENTS, LIMITS, fixture_submission, one_line, seed, visible_cases
 
-from autograder import Limits, check
+from autograder import check
 from autograder.assignments import load
 from autograder.assignments.a4 import (
     bone_directions,
@@ -28,29 +20,9 @@ from autograder.assignments.a4 import (
 from course import rotations as rot
 from course.fk import forward_kinematics
 
-FIXTURES = Path(__file__).parent / "fixtures" / "a4"
-TEMPLATE = Path(__file__).parents[1] / "assignments" / "a4_character.py"
-LIMITS = Limits(cpu_seconds=8, memory_mb=600, load_timeout=5.0, case_timeout=1.0)
-SEED = "fixture-seed-a4"
+TEMPLATE = ASSIGNMENTS / "a4_character.py"
+SEED = seed("a4")
 A4 = load("a4")
-#: a function whose mistake also costs the functions that call it (the reference's ik_local
-#: walks its own path_to)
-CALLERS = {"path_to": ("ik_local",)}
-
-
-def one_line(result) -> str:
-    return " ".join(str(result).split())
-
-
-def assert_diagnosed(result, fn: str, key: str) -> None:
-    """Every failing test of ``fn`` names the mistake, the report says it, and only ``fn``
-    and its callers lost points."""
-    failing = [t for t in result.tests if t.status != "passed"]
-    own = [t for t in failing if t.test.function == fn]
-    assert own and all(t.misconception and t.misconception.key == key for t in own), [
-        (t.test.name, t.misconception) for t in own]
-    assert f"Likely mistake, {own[0].misconception.title}" in one_line(result)
-    assert all(t.test.function in (fn, *CALLERS.get(fn, ())) for t in failing)
 
 
 # --- the judges --------------------------------------------------------------------------------
@@ -156,29 +128,6 @@ def test_symptoms_never_fire_on_right_answers_and_wrong_answers_differ():
 
 
 # --- fixture submissions -----------------------------------------------------------------------
-
-
-def test_reference_gets_full_marks():
-    result = check("a4", FIXTURES / "reference.py", seed=SEED, limits=LIMITS)
-    assert result.max_score == result.score == 13, one_line(result)
-
-
-def test_template_is_not_implemented_yet(monkeypatch):
-    monkeypatch.delenv("AUTOGRADER_SEED", raising=False)
-    result = check("a4", TEMPLATE, limits=LIMITS)
-    assert result.score == 0 and {t.status for t in result.tests} == {"not_implemented"}
-
-
-def test_catalogue_covers_every_mutant():
-    assert_catalogue_matches_fixtures(A4, "a4")
-    assert len(A4.misconceptions) >= 6
-
-
-@pytest.mark.parametrize("name", sorted(p.name for p in FIXTURES.glob("mutant_*.py")))
-def test_mutant_is_diagnosed_by_name(name, tmp_path):
-    fn, key = expectation("a4", name)
-    result = check("a4", fixture_submission("a4", name, tmp_path), seed=SEED, limits=LIMITS)
-    assert_diagnosed(result, fn, key)
 
 
 def test_rotations_left_as_they_were_earn_nothing_for_ik(tmp_path):

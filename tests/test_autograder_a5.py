@@ -7,16 +7,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pytest
-from test_autograder_a2 import (
-    assert_catalogue_matches_fixtures,
-    assert_diagnosed,
-    expectation,
-    fixture_submission,
-    visible_cases,
-)
+from grading_fixtures import FIXTURES, LIMITS, fixture_submission, visible_cases
 
-from autograder import Limits, check
+from autograder import check
 from autograder.assignments import load
 from autograder.assignments.a5 import (
     catmull_rom_variants,
@@ -28,10 +21,6 @@ from autograder.assignments.a5 import (
 )
 
 REPO = Path(__file__).resolve().parents[1]
-FIXTURES = REPO / "tests" / "fixtures" / "a5"
-TEMPLATE = REPO / "assignments" / "a5_animation.py"
-LIMITS = Limits(cpu_seconds=8, memory_mb=600, load_timeout=5.0, case_timeout=1.0)
-SEED = "fixture-seed-a5"
 A5 = load("a5")
 
 
@@ -103,29 +92,6 @@ def test_the_step_judge_names_the_broken_condition():
 # --- fixture submissions -----------------------------------------------------------------------
 
 
-def test_reference_gets_full_marks_with_the_hidden_tests():
-    result = check("a5", FIXTURES / "reference.py", seed=SEED, limits=LIMITS)
-    assert result.hidden_run and result.score == result.max_score == 14
-
-
-def test_template_is_not_implemented_yet(monkeypatch):
-    monkeypatch.delenv("AUTOGRADER_SEED", raising=False)
-    result = check("a5", TEMPLATE, limits=LIMITS)
-    assert result.score == 0 and {t.status for t in result.tests} == {"not_implemented"}
-
-
-def test_catalogue_covers_every_mutant():
-    assert_catalogue_matches_fixtures(A5, "a5")
-    assert len(A5.misconceptions) >= 7
-
-
-@pytest.mark.parametrize("name", sorted(p.name for p in FIXTURES.glob("mutant_*.py")))
-def test_mutant_is_diagnosed_by_name(name, tmp_path):
-    fn, key = expectation("a5", name)
-    result = check("a5", fixture_submission("a5", name, tmp_path), seed=SEED, limits=LIMITS)
-    assert_diagnosed(result, fn, key)
-
-
 def test_the_unclipped_segment_index_is_explained_at_the_last_key(tmp_path):
     result = check("a5", fixture_submission("a5", "mutant_catmull_last_key.py", tmp_path),
                    limits=LIMITS)
@@ -168,7 +134,7 @@ def test_running_the_course_library_is_refused(tmp_path):
 
 
 def test_scipy_is_refused_before_anything_runs():
-    result = check("a5", FIXTURES / "adv_import_scipy.py", limits=LIMITS)
+    result = check("a5", FIXTURES / "a5" / "adv_import_scipy.py", limits=LIMITS)
     assert result.score == 0
     assert ("`from scipy.sparse.linalg import ...` is not allowed: the assignment asks you to "
             "implement the math yourself with numpy") in " ".join(str(result).split())

@@ -25,16 +25,15 @@ def test_notebook_committed_without_outputs(path):
 
 
 def test_import_course_is_light():
+    """`import course` loads no heavy library; how long it takes is benchmarks/import_time.py."""
     code = (
-        "import sys, time; t = time.perf_counter(); import course, course.rotations;"
-        "dt = time.perf_counter() - t;"
-        "heavy = sorted(m for m in ('scipy', 'pyvista', 'matplotlib', 'vtk') if m in sys.modules);"
-        "print(dt, ','.join(heavy))"
+        "import sys; import course, course.rotations;"
+        "print(','.join(sorted(m for m in ('scipy', 'pyvista', 'matplotlib', 'vtk', 'ipywidgets',"
+        " 'dask') if m in sys.modules)))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    seconds, heavy = out.stdout.split()[0], out.stdout.split()[1:]
+    heavy = out.stdout.strip()
     assert not heavy, f"import course pulled in {heavy}"
-    assert float(seconds) < 0.5, f"import course took {float(seconds):.2f} s"
 
 
 def test_ruff_clean():

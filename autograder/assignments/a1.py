@@ -13,7 +13,7 @@ import numpy as np
 from course import rotations as ref
 
 from ..checks import MatrixCheck, QuatCheck
-from ..spec import Assignment, Case, Function, Misconception, Test
+from ..spec import Assignment, Case, Function, Misconception, random_edge_hidden
 
 PI = np.pi
 TAIT_BRYAN = ref.TAIT_BRYAN_ORDERS
@@ -347,14 +347,7 @@ ASSIGNMENT = Assignment(
     template="a1_rotations.py",
     functions=tuple(Function(name, params, reference, check)
                     for name, params, reference, check, *_ in _FUNCTIONS),
-    tests=tuple(
-        test
-        for name, *_, random, edges, hidden in _FUNCTIONS
-        for test in (
-            Test(f"{name}: random cases", name, 1.0, random),
-            Test(f"{name}: edge cases", name, 1.0, edges),
-            Test(f"{name}: hidden cases", name, 2.0, hidden, hidden=True),
-        )
-    ),
+    tests=tuple(test for name, *_, random, edges, hidden in _FUNCTIONS
+                for test in random_edge_hidden(name, random, edges, hidden)),
     misconceptions=MISCONCEPTIONS,
 )

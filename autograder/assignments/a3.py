@@ -25,7 +25,7 @@ from course.ik import ccd_positions, fabrik_positions, two_link
 
 from ..catalogue import pivot_mistakes
 from ..checks import Check, PointsCheck, TupleCheck, show
-from ..spec import Assignment, Case, Function, Misconception, Picture, Test
+from ..spec import Assignment, Case, Function, Misconception, Picture, Test, random_edge_hidden
 
 ROOT_TOL = 1e-6  # times the chain's length: how far the root and the bone lengths may drift
 STRETCH_TOL = 1e-3  # times the chain's length: how close to straight an out-of-reach chain ends
@@ -664,24 +664,18 @@ _FUNCTIONS = (
 )
 
 
-def _tests(fn: str, visible, edges, hidden, points: tuple[float, float, float]
-           ) -> tuple[Test, Test, Test]:
-    return (Test(f"{fn}: random cases", fn, points[0], visible),
-            Test(f"{fn}: edge cases", fn, points[1], edges),
-            Test(f"{fn}: hidden cases", fn, points[2], hidden, hidden=True))
-
-
 ASSIGNMENT = Assignment(
     key="a3",
     title="Inverse kinematics",
     template="a3_inverse_kinematics.py",
     functions=_FUNCTIONS,
     tests=(
-        *_tests("two_link_ik", two_link_random, two_link_edges, two_link_hidden, (1, 1, 2)),
-        *_tests("ccd", ccd_random, ccd_edges, ccd_hidden, (1, 1, 2)),
-        *_tests("fabrik", fabrik_random, fabrik_edges, fabrik_hidden, (1, 1, 2)),
-        *_tests("jacobian", jacobian_random, jacobian_edges, jacobian_hidden, (1, 1, 1)),
-        *_tests("dls_step", dls_random, dls_edges, dls_hidden, (1, 1, 1)),
+        *random_edge_hidden("two_link_ik", two_link_random, two_link_edges, two_link_hidden),
+        *random_edge_hidden("ccd", ccd_random, ccd_edges, ccd_hidden),
+        *random_edge_hidden("fabrik", fabrik_random, fabrik_edges, fabrik_hidden),
+        *random_edge_hidden("jacobian", jacobian_random, jacobian_edges, jacobian_hidden,
+                            (1, 1, 1)),
+        *random_edge_hidden("dls_step", dls_random, dls_edges, dls_hidden, (1, 1, 1)),
         Test("trace_curve (bonus): figure eights", "trace_curve", 1.0, trace_visible,
              bonus=True),
         Test("trace_curve (bonus): hidden curves", "trace_curve", 1.0, trace_hidden,

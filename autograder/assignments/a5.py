@@ -17,7 +17,7 @@ the time limit, and many have compressed springs, where the Hessian's
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -28,7 +28,7 @@ from course import rotations as rot
 from course.physics import SpringSystem, grid_cloth, implicit_euler_gradient, step
 
 from ..checks import PointsCheck, QuatCheck, TupleCheck, show
-from ..spec import Assignment, Case, Function, Misconception, Test
+from ..spec import Assignment, Case, Function, Misconception, random_edge_hidden
 
 GRAD_TOL = 1e-6  # the step's ‖∇E‖ may be this times the force scale (see force_scale)
 FIXED_TOL = 1e-9  # metres a fixed particle may drift (rounding only)
@@ -591,26 +591,15 @@ _FUNCTIONS = (
 )
 
 
-Cases = Callable[[np.random.Generator], list[Case]]  # a test's case generator
-
-
-def _tests(fn: str, visible: Cases, edges: Cases, hidden: Cases,
-           points: tuple[float, float, float]
-           ) -> tuple[Test, Test, Test]:
-    return (Test(f"{fn}: random cases", fn, points[0], visible),
-            Test(f"{fn}: edge cases", fn, points[1], edges),
-            Test(f"{fn}: hidden cases", fn, points[2], hidden, hidden=True))
-
-
 ASSIGNMENT = Assignment(
     key="a5",
     title="Keyframes and implicit Euler",
     template="a5_animation.py",
     functions=_FUNCTIONS,
     tests=(
-        *_tests("catmull_rom", catmull_random, catmull_edges, catmull_hidden, (1, 1, 2)),
-        *_tests("squad", squad_random, squad_edges, squad_hidden, (1, 1, 2)),
-        *_tests("implicit_euler_step", step_random, step_edges, step_hidden, (2, 2, 2)),
+        *random_edge_hidden("catmull_rom", catmull_random, catmull_edges, catmull_hidden),
+        *random_edge_hidden("squad", squad_random, squad_edges, squad_hidden),
+        *random_edge_hidden("implicit_euler_step", step_random, step_edges, step_hidden, (2, 2, 2)),
     ),
     misconceptions=MISCONCEPTIONS,
 )
