@@ -327,6 +327,9 @@ def test_ik_playground_says_when_a_solve_started_from_the_reach_start():
         pg._dragged(np.array([3.996, 0.0, 0.0]))  # 0.999 of the reach
         assert pg.result.start == "reach" and pg.result.converged
         assert "started bent evenly: the target is near full reach" in pg.readout.value
+        pg._dragged(np.array([3.0, 3.0, 0.0]))  # beyond the reach of 4
+        assert pg.result.reason == "unreachable"
+        assert "out of reach: the chain is stretched towards the target" in pg.readout.value
     finally:
         pg.close()
 

@@ -550,12 +550,12 @@ def _ik_methods() -> tuple[str, ...]:
 
 
 def _drag_pad(scene: SkeletonScene, center: ArrayLike, half: float, position: ArrayLike,
-              on_drag: Any) -> Any:
+              on_drag: Any, size: int = 180) -> Any:
     """A pad that drags the target in the plane the view's camera faces (views that take no
     mouse: browser-rendered, static), see :mod:`course.viz.drag_pad`."""
     from .drag_pad import ViewPlaneDrag
 
-    return ViewPlaneDrag(scene.plotter.camera, center, half, position, on_drag)
+    return ViewPlaneDrag(scene.plotter.camera, center, half, position, on_drag, size=size)
 
 
 def _pad_row(drag: Any) -> list[widgets.Widget]:
@@ -566,6 +566,20 @@ def _pad_row(drag: Any) -> list[widgets.Widget]:
                            layout=widgets.Layout(margin="4px 0 2px 84px"))
     drag.pad.layout = widgets.Layout(margin="0 0 6px 84px", flex="0 0 auto")
     return [caption, drag.pad]
+
+
+def _beside_pad(target_sliders: list[widgets.Widget], drag: Any) -> list[widgets.Widget]:
+    """The x, y, z sliders with a small pad to their right, so that the panel grows by a
+    line, not by the pad's height (the playground fits a 1366x768 window)."""
+    if drag is None:
+        return target_sliders
+    caption = widgets.HTML("drag:", layout=widgets.Layout(margin="0 0 2px 0"))
+    drag.pad.layout = widgets.Layout(flex="0 0 auto")
+    # room on the right: a dot at the pad's edge (a target at full reach) stays clickable
+    pad = widgets.VBox([caption, drag.pad], layout=widgets.Layout(margin="0 12px 4px 8px",
+                                                                  overflow="visible"))
+    return [widgets.HBox([widgets.VBox(target_sliders), pad],
+                         layout=widgets.Layout(align_items="center"))]
 
 
 class IKPlayground(Control):
@@ -616,7 +630,7 @@ class IKPlayground(Control):
             "iteration": widgets.IntSlider(value=0, min=0, max=0, description="iteration",
                                            **_slider_style("d")),
         }
-        self.readout = _readout(3, "360px")
+        self.readout = _readout(4, "360px")
         self.scene = SkeletonScene(window_size=(640, 500))
         # framed: the chain's reach and the first target (which may lie beyond it)
         self.scene.add_skeleton(skeleton.parents, start_pos, name="start", color=GHOST,
@@ -633,14 +647,14 @@ class IKPlayground(Control):
         self.handle = (self.scene.add_target_handle(goal, self._dragged)
                        if self.scene.draggable else None)
         self.drag = None if self.handle is not None else _drag_pad(
-            self.scene, center, reach, goal, self._dragged)
+            self.scene, center, reach, goal, self._dragged, size=96)
         for name in ("x", "y", "z"):
             _on_value(self.sliders[name], lambda _c: self._slider_moved())
         for name in ("method", "tol", "max_iter"):
             _on_value(self.sliders[name], lambda _c: self.solve())
         _on_value(self.sliders["iteration"], lambda c: self.show_iteration(c["new"]))
         sliders = list(self.sliders.values())
-        left = widgets.VBox([*sliders[:3], *_pad_row(self.drag), *sliders[3:], self.readout,
+        left = widgets.VBox([*_beside_pad(sliders[:3], self.drag), *sliders[3:], self.readout,
                              self.convergence_image])
         self.widget = _side_by_side(left, self.scene.widget())
         self.solve()
@@ -718,9 +732,17 @@ class IKPlayground(Control):
             f"<b>{r.iterations}</b> iterations<br>residual at iteration {k}: "
             f"<b>{residual[min(k, residual.size - 1)]:.2e}</b> "
             f"(final {residual[-1]:.2e})"
-            + ("<br>started bent evenly: the target is near full reach" if r.start == "reach"
-               else "")
+            + _start_note(r)
         )
+
+
+def _start_note(result: Any) -> str:
+    """A readout line when the solve did not start from the start pose (IKResult.start)."""
+    if result.start != "reach":
+        return ""
+    if result.reason == "unreachable":
+        return "<br>out of reach: the chain is stretched towards the target"
+    return "<br>started bent evenly: the target is near full reach"
 
 
 def ik_playground(skeleton: Any, methods: Sequence[str] | None = None, **kwargs: Any

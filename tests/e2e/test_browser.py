@@ -159,11 +159,14 @@ def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
         image_before = view.screenshot(path=str(ARTIFACTS / "e2e_pad_before.png"))
         # (the screenshot scrolled to the view; hovering brings the mouse back to the page)
         dot.hover()
-        page.mouse.down()
         pad = page.locator(".course-drag-pad svg").first.bounding_box()
+        # press inside the pad (a press anywhere on it takes the dot there), then drag
+        page.mouse.move(pad["x"] + 0.8 * pad["width"], pad["y"] + 0.5 * pad["height"])
+        page.mouse.down()
         page.mouse.move(pad["x"] + 0.25 * pad["width"], pad["y"] + 0.3 * pad["height"],
                         steps=10)
         page.mouse.up()
+        page.screenshot(path=str(ARTIFACTS / "e2e_pad_page.png"))
         page.wait_for_function(
             "([t]) => [...document.querySelectorAll('.widget-slider .widget-readout')]"
             ".slice(0, 3).map(e => e.innerText).join() !== t", arg=[",".join(before)],
