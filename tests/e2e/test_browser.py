@@ -146,6 +146,8 @@ def test_dragging_the_target_sphere_solves_ik_again(lab):
 @pytest.mark.parametrize("lab", ["client"], indirect=True)
 def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
     """vtk.js sends no picks to the kernel: the pad beside the view drags the target."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
     base, _ = lab
     with _notebook_page(base, DRAG_NOTEBOOK, "e2e_pad") as page:
         dot = page.locator(".course-drag-pad .course-drag-dot")
@@ -157,20 +159,29 @@ def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
         readouts = page.locator(".widget-slider .widget-readout")
         before = [readouts.nth(k).inner_text() for k in range(3)]
         image_before = view.screenshot(path=str(ARTIFACTS / "e2e_pad_before.png"))
-        # (the screenshot scrolled to the view; hovering brings the mouse back to the page)
-        dot.hover()
-        pad = page.locator(".course-drag-pad svg").first.bounding_box()
-        # press inside the pad (a press anywhere on it takes the dot there), then drag
-        page.mouse.move(pad["x"] + 0.8 * pad["width"], pad["y"] + 0.5 * pad["height"])
-        page.mouse.down()
-        page.mouse.move(pad["x"] + 0.25 * pad["width"], pad["y"] + 0.3 * pad["height"],
-                        steps=10)
-        page.mouse.up()
-        page.screenshot(path=str(ARTIFACTS / "e2e_pad_page.png"))
-        page.wait_for_function(
-            "([t]) => [...document.querySelectorAll('.widget-slider .widget-readout')]"
-            ".slice(0, 3).map(e => e.innerText).join() !== t", arg=[",".join(before)],
-            timeout=20_000)
+        # (the screenshot scrolled to the view; hovering brings the mouse back to the page.
+        # Synthetic mouse events right after a screenshot of the view's iframe are sometimes
+        # lost, so the drag is tried up to three times; one of them must move the target)
+        moved = False
+        for attempt in range(3):
+            dot.hover()
+            pad = page.locator(".course-drag-pad svg").first.bounding_box()
+            # press inside the pad (a press anywhere on it takes the dot there), then drag
+            page.mouse.move(pad["x"] + 0.8 * pad["width"], pad["y"] + 0.5 * pad["height"])
+            page.mouse.down()
+            page.mouse.move(pad["x"] + (0.25 + 0.1 * attempt) * pad["width"],
+                            pad["y"] + 0.3 * pad["height"], steps=10)
+            page.mouse.up()
+            try:
+                page.wait_for_function(
+                    "([t]) => [...document.querySelectorAll('.widget-slider .widget-readout')]"
+                    ".slice(0, 3).map(e => e.innerText).join() !== t", arg=[",".join(before)],
+                    timeout=10_000)
+                moved = True
+                break
+            except PlaywrightTimeout:
+                page.screenshot(path=str(ARTIFACTS / f"e2e_pad_attempt{attempt}.png"))
+        assert moved, "three drags on the pad did not move the target sliders"
         page.wait_for_timeout(3000)
         after = [readouts.nth(k).inner_text() for k in range(3)]
         image_after = view.screenshot(path=str(ARTIFACTS / "e2e_pad_after.png"))
