@@ -630,7 +630,7 @@ class IKPlayground(Control):
             "iteration": widgets.IntSlider(value=0, min=0, max=0, description="iteration",
                                            **_slider_style("d")),
         }
-        self.readout = _readout(4, "360px")
+        self.readout = _readout(5, "360px")  # a long method name wraps the first line
         self.scene = SkeletonScene(window_size=(640, 500))
         # framed: the chain's reach and the first target (which may lie beyond it)
         self.scene.add_skeleton(skeleton.parents, start_pos, name="start", color=GHOST,
