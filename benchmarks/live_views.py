@@ -6,7 +6,9 @@ times and, for each press, takes the time from the key event to the first new pi
 3D view, both measured in the page (a key listener; an ``<img>`` load or a WebGL draw call,
 see ``tests/e2e/labkit.py``), never by polling screenshots. Each view is measured with every
 backend asked for, in the same run: ``static`` (PNG images), ``server`` (trame, rendered in
-the kernel) and ``default`` (what a student gets without configuring anything). BVH playback
+the kernel) and ``default`` (what a student gets without configuring anything). Holding the key for
+2 s (a press every 33 ms, like a fast drag) gives the pictures per second drawn and the lag
+from the last press to the last picture of the drag, where a backlog would show. BVH playback
 also reports the pictures per second while playing, the frame skip the player chose (its
 readout), and the pictures still arriving in the 3 s after pause (a backlog).
 
@@ -97,6 +99,30 @@ def _steps(page, label: str, steps: int) -> list[float]:
     return latencies
 
 
+def _hold(page, label: str, seconds: float = 2.0, every_s: float = 0.033) -> tuple[float, float]:
+    """Hold the right arrow key on a slider (a key press every ``every_s``, as a key's
+    auto-repeat or a fast drag sends): the pictures per second drawn meanwhile, and the lag
+    from the last press to the last picture (a backlog shows as a long lag)."""
+    handle = page.locator(f".widget-slider:has(.widget-label:text-is('{label}')) .noUi-handle")
+    handle.first.focus()
+    _settle(page)
+    t0 = _now(page)
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        page.keyboard.press("ArrowRight")
+        time.sleep(every_s)
+    t1 = page.evaluate("window.__keys[window.__keys.length - 1]")
+    _settle(page, quiet_ms=1500, limit_s=30)
+    frames = _pictures(labkit.frames_after(page, t0))
+    during = [t for t in frames if t <= t1]
+    last = t1  # the pictures still coming after the last press, ~1 s apart from trame's
+    for t in frames[len(during):]:  # whole-scene refresh of the same state, not counted
+        if t - last > 500:
+            break
+        last = t
+    return len(during) / ((t1 - t0) / 1000), last - t1
+
+
 def _pictures(times: list[float], gap_ms: float = 20.0) -> list[float]:
     """Draw marks closer than ``gap_ms`` are one picture (a render may draw in two passes)."""
     out: list[float] = []
@@ -147,6 +173,7 @@ def main() -> None:
     views = args.views.split(",")
     results: dict[tuple[str, str], list[float]] = {}
     playback: dict[str, tuple[float, str, int, int]] = {}
+    held: dict[tuple[str, str], tuple[float, float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         for b in backends:
@@ -171,6 +198,7 @@ def main() -> None:
                                          timeout=60_000)
                         time.sleep(3.0)  # the first picture of a live view
                         results[v, b] = _steps(page, VIEWS[v][2], args.steps)
+                        held[v, b] = _hold(page, VIEWS[v][2])
                         if v == "bvh_player":
                             playback[b] = _playback(page)
                     finally:
@@ -193,6 +221,10 @@ def main() -> None:
             ratio = f"  x{med / ref:5.2f} of static" if ref else ""
             print(f"  {b:<8} median {med:7.1f} ms   p90 {np.nanpercentile(lat, 90):7.1f} ms"
                   f"{ratio}")
+    print("\nthe right arrow held for 2 s (a press every 33 ms): pictures/s drawn, and the lag "
+          "from the last press to the last picture")
+    for (v, b), (rate, lag) in held.items():
+        print(f"  {v:<14} {b:<8} {rate:5.1f} pictures/s   last picture {lag:7.1f} ms after")
     if playback:
         print("\nbvh_player playback (at most 30 pictures/s asked for, the skip adapted)")
         for b, (pictures, skip, soon, later) in playback.items():

@@ -110,6 +110,32 @@ def test_bvh_player_shows_the_precomputed_frame(sample_motion):
         player.close()
 
 
+def test_bvh_player_draws_other_clips_beside_it_frame_by_frame(sample_motion):
+    positions, _ = sample_motion.forward_kinematics()
+    beside = positions + [15.0, 0.0, 0.0]
+    player = controls.bvh_player(sample_motion, name="reference", others={"you": beside})
+    try:
+        assert [n for n, _ in player.scene.legend_entries()] == ["reference", "you"]
+        player.sliders["frame"].value = 21
+        np.testing.assert_allclose(player.scene.skeleton("reference").positions, positions[21])
+        np.testing.assert_allclose(player.scene.skeleton("you").positions, beside[21])
+        # framed on both clips: every frame of both lies in view at every frame
+        for f in (0, sample_motion.n_frames - 1):
+            player.sliders["frame"].value = f
+            for pts in (positions[f], beside[f]):
+                xy = player.scene.project(pts)
+                w, h = player.scene.plotter.window_size
+                assert np.all((xy >= 0) & (xy <= [w, h])), f
+    finally:
+        player.close()
+    with pytest.raises(ValueError, match=r"others\['you'\] must have the clip's shape"):
+        controls.bvh_player(sample_motion, others={"you": positions[:-1]})
+    bad = beside.copy()
+    bad[7, 3, 1] = np.nan
+    with pytest.raises(ValueError, match=r"others\['you'\] is not finite at frame 7"):
+        controls.bvh_player(sample_motion, others={"you": bad})
+
+
 class FakeLoop:
     """A clock and ``call_later`` for playback: time moves only when the loop runs a callback
     (to its due time) or a picture is drawn (``cost`` seconds each)."""

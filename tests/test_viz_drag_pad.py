@@ -1,4 +1,5 @@
-"""course.viz.drag_pad: the pad drags an IK target in the plane the view's camera faces."""
+"""course.viz.drag_pad: the pad drags an IK target in the plane the view's camera faces, or
+in a planar arm's plane."""
 
 from __future__ import annotations
 
@@ -49,10 +50,59 @@ def test_the_pad_moves_in_the_view_plane_and_keeps_the_depth(direction, start, u
     assert len(moved) == 1
 
 
+@settings(derandomize=True, max_examples=60)
+@given(direction=st.tuples(finite, finite, finite).filter(lambda d: np.linalg.norm(d) > 0.1),
+       normal=st.tuples(finite, finite, finite).filter(lambda n: np.linalg.norm(n) > 0.1),
+       uv=st.tuples(st.floats(-1, 1), st.floats(-1, 1)))
+def test_a_pad_across_a_normal_keeps_the_target_in_that_plane(direction, normal, uv):
+    camera = SimpleNamespace(position=tuple(direction), focal_point=(0.0, 0.0, 0.0),
+                             up=(0.0, 1.0, 0.0))
+    start = np.array([0.3, -0.2, 0.7])
+    moved = []
+    drag = ViewPlaneDrag(camera, center=(0.0, 0.0, 0.0), half=1.5, position=start,
+                         on_drag=moved.append, normal=normal)
+    n = np.asarray(normal) / np.linalg.norm(normal)
+    axes = np.stack([drag.right, drag.up, drag.depth_axis])
+    np.testing.assert_allclose(axes @ axes.T, np.eye(3), atol=1e-9)
+    np.testing.assert_allclose(abs(drag.depth_axis @ n), 1.0, atol=1e-12)
+    assert drag.depth_axis @ np.asarray(direction) >= 0, "the pad faces the camera's side"
+    assume(drag.pad.uv != list(uv))
+    drag.pad.uv = list(uv)
+    # every dragged target lies in the plane across n through the start
+    assert len(moved) == 1 and moved[0] @ n == pytest.approx(start @ n, abs=1e-9)
+
+
 def test_bad_half_is_named():
     camera = SimpleNamespace(position=(0, 0, 5), focal_point=(0, 0, 0), up=(0, 1, 0))
     with pytest.raises(ValueError, match="half"):
         ViewPlaneDrag(camera, (0, 0, 0), 0.0, (0, 0, 0), lambda p: None)
+    with pytest.raises(ValueError, match="normal"):
+        ViewPlaneDrag(camera, (0, 0, 0), 1.0, (0, 0, 0), lambda p: None, normal=(0, 0, 0))
+
+
+def test_a_planar_arm_is_seen_face_on_and_dragged_in_its_plane():
+    from course.skeleton import chain
+
+    arm = chain([1.0, 0.8, 0.6, 0.4], axes=[0, 0, 1])  # hinges about z: the xy plane
+    pg = controls.ik_playground(arm, methods=["dls"])
+    try:
+        assert pg.scene._camera == "front"
+        np.testing.assert_allclose(pg.drag.depth_axis, [0.0, 0.0, 1.0])
+        for uv in ([0.3, 0.5], [-0.6, 0.2], [0.9, -0.4]):
+            pg.drag.pad.uv = uv
+            assert pg.target[2] == pytest.approx(0.0, abs=1e-12)
+            # in the plane, within reach: solved, not "singular" as off the plane
+            assert pg.result.converged, (uv, pg.result.reason)
+    finally:
+        pg.close()
+    ball = controls.ik_playground(chain([1.0, 0.8]), methods=["dls"])  # ball joints
+    try:
+        assert ball.scene._camera == "iso"
+        cam = ball.scene.plotter.camera
+        d = np.subtract(cam.position, cam.focal_point)
+        np.testing.assert_allclose(ball.drag.depth_axis, d / np.linalg.norm(d))
+    finally:
+        ball.close()
 
 
 def test_ik_playground_target_follows_the_pad_and_the_pad_the_sliders():
@@ -92,3 +142,23 @@ def test_full_body_ik_pad_drags_the_edited_effector():
         assert any(np.allclose(t, fb.targets[name]) for t in fb.scene.target_positions)
     finally:
         fb.close()
+
+
+def test_the_plane_normal_is_found_only_for_hinges_about_one_world_axis():
+    from course.rotations import quat_from_axis_angle
+    from course.skeleton import chain
+
+    def normal(skeleton, local=None):
+        n = skeleton.n_joints
+        local = np.tile([1.0, 0, 0, 0], (n, 1)) if local is None else local
+        _, rot = skeleton.forward_kinematics(local, np.zeros(3))
+        return controls._hinge_plane_normal(skeleton, n - 1, rot)
+
+    np.testing.assert_allclose(normal(chain([1.0, 1.0], axes=[0, 0, 1])), [0, 0, 1])
+    # a hinge's world axis is Q_j a_j: a bent start about the same axis keeps it
+    local = np.tile([1.0, 0, 0, 0], (3, 1))
+    local[0] = quat_from_axis_angle(np.array([0.0, 0.0, 1.0]), 0.7)
+    np.testing.assert_allclose(normal(chain([1.0, 1.0], axes=[0, 0, 1]), local), [0, 0, 1],
+                               atol=1e-12)
+    assert normal(chain([1.0, 1.0])) is None  # ball joints
+    assert normal(chain([1.0, 1.0], axes=[[0, 0, 1], [1, 0, 0]])) is None  # two axes

@@ -279,3 +279,95 @@ def test_a_browser_view_publishes_changes_at_once_and_the_whole_scene_when_still
     assert published == [("trame.vtk.delta", {"window": "window", "new": False})] * 5
     assert full == [1]
     assert not _send_changes_only(object()), "a view of another kind is left as it is"
+
+
+class _FakeLoop:
+    """A clock and ``call_later`` that run only when told."""
+
+    def __init__(self):
+        self.now, self.timers = 0.0, []
+
+    def call_later(self, delay, fn):
+        self.timers.append((self.now + delay, fn))
+
+    def advance(self, seconds):
+        self.now += seconds
+        due = [t for t in self.timers if t[0] <= self.now]
+        self.timers = [t for t in self.timers if t[0] > self.now]
+        for _, fn in due:
+            fn()
+
+
+def test_browser_draws_hold_back_all_but_the_newest_change_until_the_last_is_drawn():
+    from course.viz.scene import BrowserDraws
+
+    loop = _FakeLoop()
+    draws = BrowserDraws(clock=lambda: loop.now, call_later=loop.call_later)
+    sent = []
+    draws.send_or_wait(lambda: sent.append(0))
+    assert sent == [0] and draws.pending() == 0, "a view that never answered is not waited for"
+    draws.drawn()  # now it answers: from here each change waits for the last one's picture
+    draws.send_or_wait(lambda: sent.append(1))
+    assert draws.pending() == 1
+    for k in (2, 3, 4):  # a fast drag while the browser draws change 1
+        draws.send_or_wait(lambda k=k: sent.append(k))
+    assert sent == [0, 1], "nothing is sent while the browser still draws"
+    draws.drawn()  # change 1 drawn: the newest (4) goes, 2 and 3 never
+    assert sent == [0, 1, 4] and draws.pending() == 1
+    draws.drawn()
+    assert draws.pending() == 0 and draws.count == 3
+    loop.advance(5.0)
+    assert sent == [0, 1, 4], "no timer sends a change twice"
+
+
+def test_browser_draws_stop_waiting_for_a_browser_that_went_quiet():
+    from course.viz.scene import BrowserDraws
+
+    loop = _FakeLoop()
+    draws = BrowserDraws(patience=1.0, clock=lambda: loop.now, call_later=loop.call_later)
+    sent = []
+    draws.drawn()
+    draws.send_or_wait(lambda: sent.append(1))
+    draws.send_or_wait(lambda: sent.append(2))  # held: 1 is not drawn
+    loop.advance(0.5)
+    assert sent == [1] and draws.pending() == 1
+    loop.advance(0.6)  # the tab was closed: 1 is forgotten and the held change goes
+    assert sent == [1, 2]
+    loop.advance(1.1)
+    assert draws.pending() == 0
+
+
+def test_a_browser_view_sends_a_drag_at_the_pace_the_browser_draws():
+    from course.viz.scene import BrowserDraws, _send_changes_only
+
+    published = []
+
+    class View:
+        _VtkLocalView__view = "window"
+        _widgets: list = []
+
+        class _helper:  # noqa: N801
+            @staticmethod
+            def scene(window, new_state, widgets, orientation_axis):
+                return {"state": state[0]}
+
+        class server:  # noqa: N801 (trame's attribute name)
+            class protocol:  # noqa: N801
+                @staticmethod
+                def publish(topic, delta):
+                    published.append(delta["state"])
+
+        def update(self, **_kwargs):
+            pass
+
+    loop = _FakeLoop()
+    draws = BrowserDraws(clock=lambda: loop.now, call_later=loop.call_later)
+    draws.drawn()  # the browser answers
+    view, state = View(), [0]
+    assert _send_changes_only(view, draws)
+    for k in range(1, 6):  # five renders while the browser draws the first
+        state[0] = k
+        view.update()
+    assert published == [1]
+    draws.drawn()
+    assert published == [1, 5], "the browser gets the newest state, not a backlog"

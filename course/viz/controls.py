@@ -409,7 +409,9 @@ class BVHPlayer(Control):
     """Play a clip: play/pause, frame slider, speed, loop, camera. FK runs once for the whole
     clip; a frame change is a point update. The root's path is drawn on the floor; ``curves``
     (label -> ``(F,)`` angles in radians, e.g. a knee's flexion) are plotted under the view
-    with a cursor at the current frame.
+    with a cursor at the current frame. ``others`` (label -> ``(F, J, 3)`` joint positions of
+    the same skeleton, e.g. a student's FK of the clip) are drawn beside it, frame by frame,
+    and ``name`` labels the clip's own skeleton.
 
     Playback runs in the kernel, one picture at a time: the next frame is drawn only once the
     last picture has been sent, and frames are skipped to keep the clip's speed at the rate
@@ -421,6 +423,7 @@ class BVHPlayer(Control):
 
     def __init__(self, motion: Any, *, camera: str = "follow", display_fps: float = 30.0,
                  curves: Mapping[str, ArrayLike] | None = None,
+                 others: Mapping[str, ArrayLike] | None = None, name: str | None = None,
                  clock: Callable[[], float] | None = None,
                  call_later: Callable[[float, Callable[[], None]], Any] | None = None) -> None:
         import time
@@ -431,6 +434,8 @@ class BVHPlayer(Control):
         self.motion = motion
         self.positions, self.orientations = motion.forward_kinematics()
         n = self.positions.shape[0]
+        self.others = {label: _clip_positions(label, p, self.positions.shape)
+                       for label, p in (others or {}).items()}
         self.pacer = PlaybackPacer(1.0 / motion.frame_time, max_pictures_per_s=display_fps)
         self._clock = clock or time.monotonic
         self._call_later = call_later or kernel_call_later
@@ -452,8 +457,13 @@ class BVHPlayer(Control):
         }
         self.readout = _readout(1)
         self.scene = SkeletonScene(window_size=(720, 480), camera="iso")
-        self.scene.add_skeleton(motion.skeleton.parents, self.positions[0], name=motion.name
-                                or "motion", frame_points=self.positions)
+        self.name = name or motion.name or "motion"
+        # framed on all the clips (the follow camera: about the first one's root)
+        everything = np.concatenate([self.positions, *self.others.values()], axis=1)
+        self.scene.add_skeleton(motion.skeleton.parents, self.positions[0], name=self.name,
+                                frame_points=everything)
+        for label, clip in self.others.items():
+            self.scene.add_skeleton(motion.skeleton.parents, clip[0], name=label)
         self.scene.set_camera(camera)
         floor = float(self.positions[..., 1].min())
         path = self.positions[:, 0] * [1.0, 0.0, 1.0] + [0.0, floor, 0.0]
@@ -521,7 +531,9 @@ class BVHPlayer(Control):
 
     def show_frame(self, frame: int) -> None:
         self.frame = int(frame)
-        self.scene.set_pose(self.positions[self.frame])
+        for label, clip in self.others.items():  # one render, with the last
+            self.scene.set_pose(clip[self.frame], name=label, render=False)
+        self.scene.set_pose(self.positions[self.frame], name=self.name)
         self._show_readout()
         if self.curves is not None:
             self.curves.set_frame(self.frame)
@@ -531,6 +543,18 @@ class BVHPlayer(Control):
         playing = f" &middot; {self.pacer.describe()}" if self.playing else ""
         self.readout.value = (f"frame {self.frame} / {self.positions.shape[0] - 1}, "
                               f"t = {self.frame * self.motion.frame_time:.3f} s{playing}")
+
+
+def _clip_positions(label: str, positions: ArrayLike, shape: tuple[int, ...]) -> Array:
+    """``positions`` as a float array of ``shape`` (F, J, 3), or an error naming ``label``."""
+    p = np.asarray(positions, dtype=np.float64)
+    if p.shape != shape:
+        raise ValueError(f"others[{label!r}] must have the clip's shape {shape} (frames, "
+                         f"joints, 3), got {p.shape}")
+    if not np.isfinite(p).all():
+        frame = int(np.argwhere(~np.isfinite(p))[0, 0])
+        raise ValueError(f"others[{label!r}] is not finite at frame {frame}")
+    return p
 
 
 def bvh_player(motion: Any, *, camera: str = "follow",
@@ -550,12 +574,46 @@ def _ik_methods() -> tuple[str, ...]:
 
 
 def _drag_pad(scene: SkeletonScene, center: ArrayLike, half: float, position: ArrayLike,
-              on_drag: Any, size: int = 180) -> Any:
-    """A pad that drags the target in the plane the view's camera faces (views that take no
-    mouse: browser-rendered, static), see :mod:`course.viz.drag_pad`."""
+              on_drag: Any, size: int = 180, normal: Array | None = None) -> Any:
+    """A pad that drags the target in the plane the view's camera faces, or across
+    ``normal`` (views that take no mouse: browser-rendered, static), see
+    :mod:`course.viz.drag_pad`."""
     from .drag_pad import ViewPlaneDrag
 
-    return ViewPlaneDrag(scene.plotter.camera, center, half, position, on_drag, size=size)
+    return ViewPlaneDrag(scene.plotter.camera, center, half, position, on_drag, size=size,
+                         normal=normal)
+
+
+def _hinge_plane_normal(skeleton: Any, effector: int, orientations: Array) -> Array | None:
+    """The world axis ``n`` of the hinges from the root to ``effector`` when they all turn
+    about it (a planar arm: the effector then moves in the plane across ``n``), else None.
+    ``orientations``: the global orientations ``Q_j (J, 4)`` of the pose; a hinge's world
+    axis is ``Q_j a_j``."""
+    from course.rotations import quat_rotate
+
+    axes = []
+    j = int(skeleton.parents[effector])
+    while j >= 0:
+        a = _dof_axes(skeleton, j)
+        if len(a) > 1:  # a ball or universal joint turns the chain out of any plane
+            return None
+        if len(a):
+            axes.append(quat_rotate(orientations[j], a[0] / np.linalg.norm(a[0])))
+        j = int(skeleton.parents[j])
+    if not axes or any(np.linalg.norm(np.cross(a, axes[0])) > 1e-9 for a in axes):
+        return None
+    n: Array = axes[0]
+    return n
+
+
+def _facing(normal: Array | None) -> str | None:
+    """The camera preset that looks along ``normal`` (a world axis), if one does."""
+    if normal is None:
+        return None
+    for preset, axis in (("front", 2), ("side", 0), ("top", 1)):
+        if abs(normal[axis]) > 1 - 1e-9:
+            return preset
+    return None
 
 
 def _pad_row(drag: Any) -> list[widgets.Widget]:
@@ -610,8 +668,10 @@ class IKPlayground(Control):
                       else np.array(local_rotations, dtype=np.float64).reshape(n, 4))
         self.root_position = (np.zeros(3) if root_position is None
                               else np.asarray(root_position, dtype=np.float64).reshape(3))
-        start_pos, _ = skeleton.forward_kinematics(self.start, self.root_position)
+        start_pos, start_rot = skeleton.forward_kinematics(self.start, self.root_position)
         reach = float(np.linalg.norm(skeleton.offsets[1:], axis=1).sum())
+        # a planar arm is seen face on, and its target dragged in its plane
+        normal = _hinge_plane_normal(skeleton, self.effector, start_rot)
         goal = (start_pos[self.effector] + np.array([-0.3, 0.4, 0.0]) * reach * 0.5
                 if target is None else np.asarray(target, dtype=np.float64).reshape(3))
         center = start_pos[0]
@@ -631,7 +691,7 @@ class IKPlayground(Control):
                                            **_slider_style("d")),
         }
         self.readout = _readout(5, "360px")  # a long method name wraps the first line
-        self.scene = SkeletonScene(window_size=(640, 500))
+        self.scene = SkeletonScene(window_size=(640, 500), camera=_facing(normal) or "iso")
         # framed: the chain's reach and the first target (which may lie beyond it)
         self.scene.add_skeleton(skeleton.parents, start_pos, name="start", color=GHOST,
                                 opacity=0.55, frame_points=np.vstack([start_pos, goal]),
@@ -647,7 +707,7 @@ class IKPlayground(Control):
         self.handle = (self.scene.add_target_handle(goal, self._dragged)
                        if self.scene.draggable else None)
         self.drag = None if self.handle is not None else _drag_pad(
-            self.scene, center, reach, goal, self._dragged, size=96)
+            self.scene, center, reach, goal, self._dragged, size=96, normal=normal)
         for name in ("x", "y", "z"):
             _on_value(self.sliders[name], lambda _c: self._slider_moved())
         for name in ("method", "tol", "max_iter"):

@@ -3,7 +3,9 @@
 The browser-rendered view (vtk.js) and the static image send no picks to the kernel, so
 their target cannot be dragged in 3D. The pad is a square in the plane that faces the
 view's camera: dragging its red dot moves the target along the camera's right and up
-axes, ``p = c + h (u r + v s) + ((p_0 - c) . d) d``, keeping its depth ``d``. It is an
+axes, ``p = c + h (u r + v s) + ((p_0 - c) . d) d``, keeping its depth ``d``. For a chain
+of hinges about one axis ``n`` (a planar arm) the plane is the one across ``n``, the only
+one its end can reach: ``d = n``. It is an
 anywidget (a few lines of JavaScript), so it works wherever ipywidgets do: JupyterLab,
 Notebook, VS Code, Colab.
 """
@@ -81,7 +83,8 @@ class DragPad(anywidget.AnyWidget):
 
 
 class ViewPlaneDrag:
-    """Map a :class:`DragPad` to target positions in the plane facing ``camera``.
+    """Map a :class:`DragPad` to target positions in the plane facing ``camera``, or in the
+    plane across ``normal``.
 
     Parameters
     ----------
@@ -90,17 +93,32 @@ class ViewPlaneDrag:
     half : half the pad's side in world units.
     position : (3,) the target now.
     on_drag : called with each new target position ``(3,)`` while the dot is dragged.
+    normal : (3,) the pad's plane is across this axis instead of facing the camera: a chain
+        of hinges about one axis reaches only a plane across it, so the pad stays in that
+        plane (the camera's right and up, projected into it, keep the pad's directions).
     """
 
     def __init__(self, camera: Any, center: ArrayLike, half: float, position: ArrayLike,
-                 on_drag: Callable[[Array], None], *, size: int = 180) -> None:
+                 on_drag: Callable[[Array], None], *, size: int = 180,
+                 normal: ArrayLike | None = None) -> None:
         from ._backend import latest_on_gl_thread
 
         if not half > 0:
             raise ValueError(f"half must be positive, got {half!r}")
         d = np.subtract(camera.position, camera.focal_point)
-        self.depth_axis = d / np.linalg.norm(d)  # towards the camera
-        right = np.cross(camera.up, self.depth_axis)
+        towards_camera = d / np.linalg.norm(d)
+        self.depth_axis = towards_camera
+        if normal is not None:
+            n = np.asarray(normal, dtype=np.float64).reshape(3)
+            if not np.linalg.norm(n) > 0:
+                raise ValueError(f"normal must be a non-zero vector, got {normal!r}")
+            n = n / np.linalg.norm(n)
+            # facing the camera's side; a plane seen edge-on gets the camera's up for its up
+            self.depth_axis = n if n @ towards_camera >= 0 else -n
+        right = np.cross(camera.up, towards_camera)
+        right -= (right @ self.depth_axis) * self.depth_axis
+        if np.linalg.norm(right) < 1e-6:  # looking along the plane's up: any right will do
+            right = np.cross(self.depth_axis, np.eye(3)[np.argmin(np.abs(self.depth_axis))])
         self.right = right / np.linalg.norm(right)
         self.up = np.cross(self.depth_axis, self.right)
         self.center = np.asarray(center, dtype=np.float64).reshape(3)

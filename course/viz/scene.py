@@ -203,6 +203,7 @@ class SkeletonScene:
         self._in_browser = self.backend == "client"
         self._browser_views: list[Any] = []  # the vtk.js views showing this scene
         self._live_servers: list[Any] = []  # the trame servers of live views
+        self._drawn = BrowserDraws()  # pictures the vtk.js views have not drawn yet
         self._camera_moved = False
         self._legend: Any = None  # an HTML legend above a view rendered in the browser
         self.skeletons: dict[str, SkeletonActors] = {}
@@ -697,9 +698,14 @@ class SkeletonScene:
         server = getattr(getattr(view, "viewer", None), "server", None)
         if server is not None:
             self._live_servers.append(server)
-        for local_view in getattr(getattr(view, "viewer", None), "views", ()):
-            if _send_changes_only(local_view):
+        viewer = getattr(view, "viewer", None)
+        for local_view in getattr(viewer, "views", ()):
+            if _send_changes_only(local_view, self._drawn):
                 self._browser_views.append(local_view)
+                # the vtk.js view says when it has drawn a change (playback waits for that)
+                local_view.after_scene_loaded = self._drawn.drawn
+        if self._browser_views and getattr(viewer, "layout", None) is not None:
+            viewer.layout.flush_content()  # before the page loads: the event is in its template
         # the iframe is as wide as its box (keeping its aspect): the window's width, narrower
         # when the notebook is, never nothing
         view.layout.width = f"{self.plotter.window_size[0]}px"
@@ -708,11 +714,13 @@ class SkeletonScene:
         return view
 
     def pictures_in_flight(self) -> int:
-        """Messages to this scene's live views (trame's websocket) not yet handed to the
-        network: the last picture is delivered once this is 0. Always 0 for a static image,
-        which travels with its widget's own message."""
-        return sum(getattr(getattr(getattr(s, "context", None), "network_monitor", None),
-                           "pending", 0) for s in self._live_servers)
+        """Pictures of this scene's live views not yet shown: messages on trame's websocket
+        not yet handed to the network, and pictures the browser's vtk.js view has not drawn
+        (:class:`BrowserDraws`). The last picture is on screen once this is 0. Always 0 for
+        a static image, which travels with its widget's own message."""
+        return self._drawn.pending() + sum(
+            getattr(getattr(getattr(s, "context", None), "network_monitor", None), "pending", 0)
+            for s in self._live_servers)
 
     def show(self) -> None:
         """Display the view: in a notebook as :meth:`widget`, else in a window (blocking)."""
@@ -729,45 +737,116 @@ class SkeletonScene:
         on_gl_thread(self.plotter.close)
 
 
-def _send_changes_only(view: Any) -> bool:
+class BrowserDraws:
+    """Changes sent to a browser-rendered (vtk.js) view and not yet drawn there.
+
+    The view answers every change it has applied (its ``afterSceneLoaded`` event, a message
+    back to the kernel). So the kernel sends a change only once the last one is drawn, and
+    while the browser draws it keeps only the newest (:meth:`send_or_wait`): a drag faster
+    than the browser draws shows its latest state, never a backlog; a player waits for the
+    picture on the student's screen, not only on the network, and its frame skip says what is
+    seen. Until a first answer arrives nothing is waited for (a view that never answers), and
+    a change unanswered after ``patience`` seconds is forgotten (a closed tab, a lost message).
+    """
+
+    def __init__(self, *, patience: float = 1.0, clock: Callable[[], float] | None = None,
+                 call_later: Callable[[float, Callable[[], None]], Any] | None = None) -> None:
+        import collections
+        import time
+
+        self.patience = float(patience)
+        self._clock = clock or time.monotonic
+        self.call_later = call_later or _event_loop_call_later  # the kernel's loop
+        self._sent: collections.deque[float] = collections.deque()
+        self._waiting: Callable[[], None] | None = None  # the newest change held back
+        self.answers = False  # the browser has answered at least once
+        self.count = 0  # changes drawn, as the browser said
+
+    def pending(self) -> int:
+        """Changes sent and not yet drawn (0 while the browser has never answered)."""
+        now = self._clock()
+        while self._sent and now - self._sent[0] > self.patience:
+            self._sent.popleft()
+        return len(self._sent) if self.answers else 0
+
+    def send_or_wait(self, send: Callable[[], None]) -> None:
+        """Call ``send`` (which sends the scene's changes) now if the browser has drawn all it
+        was sent, else once it has (only the newest ``send`` is kept)."""
+        if not self.pending():
+            self._send(send)
+            return
+        if self._waiting is None:  # a browser that stops answering is waited for no longer
+            self.call_later(self.patience, self._send_waiting)
+        self._waiting = send
+
+    def drawn(self, *_event: Any) -> None:
+        """The browser has applied a change and draws it (the oldest one sent)."""
+        self.answers = True
+        self.count += 1
+        if self._sent:
+            self._sent.popleft()
+        if not self.pending():
+            self._send_waiting()
+
+    def _send(self, send: Callable[[], None]) -> None:
+        self._sent.append(self._clock())
+        send()
+
+    def _send_waiting(self) -> None:
+        send, self._waiting = self._waiting, None
+        if send is not None:
+            self._send(send)
+
+
+def _event_loop_call_later(delay: float, fn: Callable[[], None]) -> None:
+    import asyncio
+
+    asyncio.get_event_loop().call_later(delay, fn)
+
+
+def _send_changes_only(view: Any, draws: BrowserDraws | None = None) -> bool:
     """Make a browser-rendered (vtk.js) view send only what changed on each render.
 
     trame's ``VtkLocalView.update`` serializes the scene twice per render: the changes
     (published at once) and the whole state (kept for a page that reloads), which the browser
-    then applies a second time. Here a render publishes the changes only; the whole state is
-    refreshed once the view has been still for a second. Views of another kind, or of a trame
-    version without these internals, are left as they are (returns False).
+    then applies a second time. Here a render publishes the changes only, paced by the
+    browser's draws (``draws``, see :class:`BrowserDraws`); the whole state is refreshed once
+    the view has been still for a second. Views of another kind, or of a trame version without
+    these internals, are left as they are (returns False).
     """
     render_window = getattr(view, "_VtkLocalView__view", None)
     helper = getattr(view, "_helper", None)
     if render_window is None or helper is None or not hasattr(view, "_widgets"):
         return False
-    import asyncio
     import time
 
+    draws = draws or BrowserDraws()
     full_update = view.update
     last = [0.0, False]  # time of the last change, whether a refresh is scheduled
 
     def refresh() -> None:  # one timer per quiet second, not one per render
         wait = last[0] + 1.0 - time.monotonic()
         if wait > 0:
-            asyncio.get_event_loop().call_later(wait, refresh)
+            draws.call_later(wait, refresh)
             return
         last[1] = False
         full_update()
 
     def update(widgets: Any = None, orientation_axis: int = 0, **_kwargs: Any) -> None:
-        protocol = view.server.protocol
-        if not protocol:
-            return
-        delta = helper.scene(render_window, new_state=False,
-                             widgets=view._widgets if widgets is None else widgets,
-                             orientation_axis=orientation_axis)
-        protocol.publish("trame.vtk.delta", delta)
-        last[0] = time.monotonic()
-        if not last[1]:
-            last[1] = True
-            asyncio.get_event_loop().call_later(1.0, refresh)
+        def send() -> None:  # the scene as it is when sent: the newest state
+            protocol = view.server.protocol
+            if not protocol:
+                return
+            delta = helper.scene(render_window, new_state=False,
+                                 widgets=view._widgets if widgets is None else widgets,
+                                 orientation_axis=orientation_axis)
+            protocol.publish("trame.vtk.delta", delta)
+            last[0] = time.monotonic()
+            if not last[1]:
+                last[1] = True
+                draws.call_later(1.0, refresh)
+
+        draws.send_or_wait(send)
 
     view.update = update
     return True
@@ -813,6 +892,7 @@ class FrameScene:
         self._in_browser = False
         self._browser_views: list[Any] = []
         self._live_servers: list[Any] = []
+        self._drawn = BrowserDraws()
         self._camera_moved = False
         size = window_size or (max(420, 300 * n_frames), 380)
         self.plotter = _new_plotter(size)
