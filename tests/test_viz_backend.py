@@ -8,7 +8,11 @@ them. These tests stand in for the kernel with a tornado loop on the test's main
 from __future__ import annotations
 
 import os
+import socket
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import pytest
 from tornado.ioloop import IOLoop
@@ -138,10 +142,7 @@ def test_a_kernel_gets_the_browser_rendered_view_unless_the_browser_cannot_reach
     monkeypatch.setitem(sys.modules, "google.colab", object())  # Colab: no port to reach
     assert _backend.jupyter_backend() == "static"
     monkeypatch.delitem(sys.modules, "google.colab")
-    monkeypatch.setenv("JUPYTERHUB_SERVICE_PREFIX", "/user/ada/")
-    assert _backend.jupyter_backend() == "client"  # the proxy is installed here
-    monkeypatch.setitem(sys.modules, "jupyter_server_proxy", None)  # a hub without it
-    assert _backend.jupyter_backend() == "static"
+    assert _backend.jupyter_backend() == "client"
 
 
 def test_an_unknown_backend_is_named_in_the_error(monkeypatch):
@@ -161,13 +162,97 @@ _VSCODE_MARKERS = ("VSCODE_PID", "VSCODE_CWD", "VSCODE_IPC_HOOK_CLI", "CODESPACE
     ({"VSCODE_CWD": "/w", "REMOTE_CONTAINERS": "true"}, "static"),  # a dev container
     ({"VSCODE_IPC_HOOK_CLI": "/tmp/x.sock", "CODESPACES": "true"}, "static"),  # a Codespace
     ({"SSH_CONNECTION": "10.0.0.2 5 10.0.0.3 22"}, "client"),   # Lab over an SSH tunnel
-    ({"JUPYTERHUB_SERVICE_PREFIX": "/user/ada/"}, "client"),     # a hub with the proxy
+    ({"JUPYTERHUB_SERVICE_PREFIX": "/user/ada/"}, "static"),     # a hub too old to probe
     ({"PYVISTA_JUPYTER_BACKEND": "server", "VSCODE_PID": "1", "CODESPACES": "true"}, "server"),
 ])
 def test_the_backend_follows_the_environment_markers(monkeypatch, env, backend):
-    for name in (*_VSCODE_MARKERS, "PYVISTA_JUPYTER_BACKEND", "JUPYTERHUB_SERVICE_PREFIX"):
+    for name in (*_VSCODE_MARKERS, "PYVISTA_JUPYTER_BACKEND", "JUPYTERHUB_SERVICE_PREFIX",
+                 "JUPYTERHUB_SERVICE_URL"):
         monkeypatch.delenv(name, raising=False)
     for name, value in env.items():
         monkeypatch.setenv(name, value)
     monkeypatch.setattr(_backend, "in_jupyter_kernel", lambda: True)
     assert _backend.jupyter_backend() == backend
+
+
+# A JupyterHub single-user server, as the kernel's probe sees it (checked on a real hub by
+# tests/e2e/test_hub.py): with jupyter-server-proxy, /user/<name>/proxy/<port>/... asks an
+# anonymous request to log in (302 to the hub's OAuth page); without it (or for any unknown
+# route) the server answers 404 before any login check.
+@contextmanager
+def _single_user_server(proxy: bool) -> Iterator[tuple[str, list[str]]]:
+    """A local HTTP server standing for ``/user/ada/``; yields its service URL and the paths
+    it was asked for."""
+    asked: list[str] = []
+
+    class Handler(BaseHTTPRequestHandler):
+        def do_GET(self) -> None:  # noqa: N802 (http.server's name)
+            asked.append(self.path)
+            if proxy and self.path.startswith("/user/ada/proxy/"):
+                self.send_response(302)
+                self.send_header("Location", "/hub/api/oauth2/authorize?client_id=ada")
+            else:
+                self.send_response(404)
+            self.send_header("Content-Length", "0")
+            self.end_headers()
+
+        def log_message(self, *args) -> None:  # quiet
+            pass
+
+    server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        yield f"http://127.0.0.1:{server.server_address[1]}/user/ada/", asked
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+@pytest.fixture
+def hub_kernel(monkeypatch):
+    """A kernel on a JupyterHub (its environment markers); the probe's cache is emptied."""
+    for name in (*_VSCODE_MARKERS, "PYVISTA_JUPYTER_BACKEND", "JUPYTERHUB_SERVICE_URL"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv("JUPYTERHUB_SERVICE_PREFIX", "/user/ada/")
+    monkeypatch.setattr(_backend, "in_jupyter_kernel", lambda: True)
+    _backend.hub_serves_proxy.cache_clear()
+    yield monkeypatch
+    _backend.hub_serves_proxy.cache_clear()
+
+
+def test_a_hub_serving_the_proxy_gets_the_client_view_and_is_asked_once(hub_kernel):
+    with _single_user_server(proxy=True) as (url, asked):
+        hub_kernel.setenv("JUPYTERHUB_SERVICE_URL", url)
+        assert _backend.jupyter_backend() == "client"
+        assert _backend.jupyter_backend() == "client"  # a second view: no second request
+    assert asked == ["/user/ada/" + _backend.HUB_PROXY_PROBE]
+
+
+def test_a_hub_without_the_proxy_gets_static_images(hub_kernel):
+    with _single_user_server(proxy=False) as (url, asked):
+        hub_kernel.setenv("JUPYTERHUB_SERVICE_URL", url)
+        assert _backend.jupyter_backend() == "static"
+    assert len(asked) == 1  # it was asked (a 404), not guessed from installed packages
+
+
+def test_on_a_hub_without_the_proxy_the_environment_still_wins(hub_kernel):
+    with _single_user_server(proxy=False) as (url, asked):
+        hub_kernel.setenv("JUPYTERHUB_SERVICE_URL", url)
+        hub_kernel.setenv("PYVISTA_JUPYTER_BACKEND", "client")
+        assert _backend.jupyter_backend() == "client"
+    assert asked == []
+
+
+def test_a_server_that_does_not_answer_means_no_proxy(hub_kernel):
+    with socket.socket() as closed:  # a port nobody listens on
+        closed.bind(("127.0.0.1", 0))
+        port = closed.getsockname()[1]
+    hub_kernel.setenv("JUPYTERHUB_SERVICE_URL", f"http://127.0.0.1:{port}/user/ada/")
+    assert _backend.jupyter_backend() == "static"
+    with socket.socket() as silent:  # accepts the connection, never answers: the timeout
+        silent.bind(("127.0.0.1", 0))
+        silent.listen()
+        url = f"http://127.0.0.1:{silent.getsockname()[1]}/user/ada/"
+        assert not _backend.hub_serves_proxy(url)
+    assert not _backend.hub_serves_proxy("not a url")

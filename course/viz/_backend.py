@@ -12,11 +12,17 @@ The choice is made for the student, never hard-coded in a notebook:
 
 On a JupyterHub (``JUPYTERHUB_SERVICE_PREFIX`` set) the trame iframe reaches the kernel's
 trame server through ``jupyter-server-proxy`` (installed with ``pyvista[jupyter]``; pyvista
-turns the proxy on by itself there); without the proxy the view falls back to ``"static"``.
+turns the proxy on by itself there). Whether the single-user server really serves the proxy
+is asked of the server itself, not of the kernel's packages (the extension can be installed
+but disabled, or the kernel run from another environment): once per kernel, a request to
+``$JUPYTERHUB_SERVICE_URL/proxy/...`` without credentials. An unknown route answers 404
+before any login check; the proxy's route asks for a login (302, 403) or answers. Without the
+proxy (or without an answer within a second or two) the view is ``"static"``.
 """
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 import sys
@@ -92,12 +98,48 @@ def jupyter_backend() -> str:
         import trame_pyvista  # noqa: F401
     except ImportError:
         return "static"
-    if os.environ.get("JUPYTERHUB_SERVICE_PREFIX"):
-        try:
-            import jupyter_server_proxy  # noqa: F401
-        except ImportError:  # the browser cannot reach the kernel's trame port
-            return "static"
+    if os.environ.get("JUPYTERHUB_SERVICE_PREFIX") and not hub_serves_proxy(
+            os.environ.get("JUPYTERHUB_SERVICE_URL", "")):
+        return "static"  # the browser cannot reach the kernel's trame port
     return "client"
+
+
+# no trailing slash: Jupyter Server answers a path ending in "/" with a redirect of its own
+HUB_PROXY_PROBE = "proxy/1/course-kinematics-probe"
+HUB_PROBE_TIMEOUT_S = 1.5
+
+
+@functools.cache
+def hub_serves_proxy(service_url: str) -> bool:
+    """True when the single-user server at ``service_url`` (``JUPYTERHUB_SERVICE_URL``, e.g.
+    ``http://127.0.0.1:41234/user/ada/``) serves ``jupyter-server-proxy``'s routes.
+
+    Asked once per kernel and URL (cached): a GET of :data:`HUB_PROXY_PROBE` with no
+    credentials, redirects not followed, environment proxies bypassed (the server is local to
+    the kernel). The proxy's handler checks the login first (302 to the hub's login, 403),
+    an unknown route is a 404; no answer, or no URL (a hub older than 2.0), counts as no proxy.
+    """
+    import http.client
+    import urllib.error
+    import urllib.request
+
+    if not service_url.startswith(("http://", "https://")):
+        return False
+
+    class NoRedirect(urllib.request.HTTPRedirectHandler):
+        def redirect_request(self, *args: Any, **kwargs: Any) -> None:
+            return None  # the 302 itself is the answer
+
+    opener = urllib.request.build_opener(urllib.request.ProxyHandler({}), NoRedirect())
+    url = service_url.rstrip("/") + "/" + HUB_PROXY_PROBE
+    try:
+        with opener.open(url, timeout=HUB_PROBE_TIMEOUT_S):
+            return True
+    except urllib.error.HTTPError as err:
+        err.close()
+        return err.code != 404 and err.code < 500
+    except (OSError, ValueError, http.client.HTTPException):  # refused, timed out, garbage
+        return False
 
 
 def _vscode_remote() -> bool:
