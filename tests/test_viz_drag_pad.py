@@ -152,7 +152,7 @@ def test_the_plane_normal_is_found_only_for_hinges_about_one_world_axis():
         n = skeleton.n_joints
         local = np.tile([1.0, 0, 0, 0], (n, 1)) if local is None else local
         _, rot = skeleton.forward_kinematics(local, np.zeros(3))
-        return controls._hinge_plane_normal(skeleton, n - 1, rot)
+        return controls._hinge_plane_normal(skeleton, controls._ancestors(skeleton, n - 1), rot)
 
     np.testing.assert_allclose(normal(chain([1.0, 1.0], axes=[0, 0, 1])), [0, 0, 1])
     # a hinge's world axis is Q_j a_j: a bent start about the same axis keeps it
@@ -162,3 +162,20 @@ def test_the_plane_normal_is_found_only_for_hinges_about_one_world_axis():
                                atol=1e-12)
     assert normal(chain([1.0, 1.0])) is None  # ball joints
     assert normal(chain([1.0, 1.0], axes=[[0, 0, 1], [1, 0, 0]])) is None  # two axes
+    assert controls._ancestors(chain([1.0, 1.0, 1.0]), 3) == [2, 1, 0]
+
+
+def test_a_planar_arm_is_posed_face_on_in_the_fk_explorer():
+    from course.skeleton import chain
+
+    fk = controls.fk_explorer(chain([1.0, 0.8, 0.5], axes=[0, 0, 1]))
+    try:
+        assert fk.scene._camera == "front"
+        w, h = fk.scene.plotter.window_size
+        for value in (-180.0, 0.0, 90.0, 180.0):  # the whole swing stays in view
+            fk.sliders["joint0.0"].value = value
+            xy = fk.scene.project(fk.scene.skeleton().positions)
+            assert np.all((xy > 0) & (xy < [w, h])), value
+    finally:
+        fk.close()
+    assert controls.fk_explorer(chain([1.0, 0.8])).scene._camera == "iso"  # ball joints

@@ -337,7 +337,9 @@ class FKExplorer(Control):
             self.local_rotations, self.root_position)
         # frame the whole reach (the pose can turn anywhere), not just this pose
         reach = float(np.linalg.norm(self.positions - self.positions[0], axis=1).max())
-        self.scene = SkeletonScene(window_size=(640, 520))
+        # a planar arm is seen face on, as in the lecture's drawings
+        normal = _hinge_plane_normal(skeleton, range(n), self.orientations)
+        self.scene = SkeletonScene(window_size=(640, 520), camera=_facing(normal) or "iso")
         self.scene.add_skeleton(skeleton.parents, self.positions, self.orientations,
                                 name="pose", axes=axes, frame_points=self.positions, reach=reach)
         # the readout above the joint list, which scrolls: it stays in sight while posing
@@ -584,26 +586,33 @@ def _drag_pad(scene: SkeletonScene, center: ArrayLike, half: float, position: Ar
                          normal=normal)
 
 
-def _hinge_plane_normal(skeleton: Any, effector: int, orientations: Array) -> Array | None:
-    """The world axis ``n`` of the hinges from the root to ``effector`` when they all turn
-    about it (a planar arm: the effector then moves in the plane across ``n``), else None.
-    ``orientations``: the global orientations ``Q_j (J, 4)`` of the pose; a hinge's world
-    axis is ``Q_j a_j``."""
+def _hinge_plane_normal(skeleton: Any, joints: Sequence[int], orientations: Array
+                        ) -> Array | None:
+    """The world axis ``n`` of the hinges among ``joints`` when they all turn about it (a
+    planar arm: what they move stays in planes across ``n``), else None (a ball or universal
+    joint among them, hinges about two axes, no hinge). ``orientations``: the global
+    orientations ``Q_j (J, 4)`` of the pose; a hinge's world axis is ``Q_j a_j``."""
     from course.rotations import quat_rotate
 
     axes = []
-    j = int(skeleton.parents[effector])
-    while j >= 0:
+    for j in joints:
         a = _dof_axes(skeleton, j)
-        if len(a) > 1:  # a ball or universal joint turns the chain out of any plane
+        if len(a) > 1:
             return None
         if len(a):
             axes.append(quat_rotate(orientations[j], a[0] / np.linalg.norm(a[0])))
-        j = int(skeleton.parents[j])
     if not axes or any(np.linalg.norm(np.cross(a, axes[0])) > 1e-9 for a in axes):
         return None
     n: Array = axes[0]
     return n
+
+
+def _ancestors(skeleton: Any, j: int) -> list[int]:
+    """The joints above ``j``, from its parent to the root (those that move it)."""
+    out = []
+    while (j := int(skeleton.parents[j])) >= 0:
+        out.append(j)
+    return out
 
 
 def _facing(normal: Array | None) -> str | None:
@@ -671,7 +680,7 @@ class IKPlayground(Control):
         start_pos, start_rot = skeleton.forward_kinematics(self.start, self.root_position)
         reach = float(np.linalg.norm(skeleton.offsets[1:], axis=1).sum())
         # a planar arm is seen face on, and its target dragged in its plane
-        normal = _hinge_plane_normal(skeleton, self.effector, start_rot)
+        normal = _hinge_plane_normal(skeleton, _ancestors(skeleton, self.effector), start_rot)
         goal = (start_pos[self.effector] + np.array([-0.3, 0.4, 0.0]) * reach * 0.5
                 if target is None else np.asarray(target, dtype=np.float64).reshape(3))
         center = start_pos[0]
