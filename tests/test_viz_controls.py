@@ -136,6 +136,24 @@ def test_bvh_player_draws_other_clips_beside_it_frame_by_frame(sample_motion):
         controls.bvh_player(sample_motion, others={"you": bad})
 
 
+def test_bvh_player_draws_the_targets_of_each_frame(sample_motion):
+    positions, _ = sample_motion.forward_kinematics()
+    targets = positions[:, -1] + [0.0, 2.0, 0.0]  # one per frame, above the last joint
+    player = controls.bvh_player(sample_motion, targets=targets)
+    try:
+        for f in (0, 17, sample_motion.n_frames - 1):
+            player.sliders["frame"].value = f
+            np.testing.assert_allclose(player.scene.target_positions, targets[f][None])
+    finally:
+        player.close()
+    with pytest.raises(ValueError, match=r"targets must have shape \(\d+, 3\)"):
+        controls.bvh_player(sample_motion, targets=targets[:-1])
+    bad = np.repeat(targets[:, None], 2, axis=1)
+    bad[4, 1, 0] = np.inf
+    with pytest.raises(ValueError, match="targets is not finite at frame 4"):
+        controls.bvh_player(sample_motion, targets=bad)
+
+
 class FakeLoop:
     """A clock and ``call_later`` for playback: time moves only when the loop runs a callback
     (to its due time) or a picture is drawn (``cost`` seconds each)."""
@@ -380,6 +398,49 @@ def test_dragging_the_target_moves_the_sliders_and_solves_once(monkeypatch):
         pg.close()
 
 
+def _browser_snap(slider, value):
+    """What the browser's slider sends back for ``value``: the nearest ``min + n step``."""
+    return slider.min + round((value - slider.min) / slider.step) * slider.step
+
+
+def test_the_browser_rounding_a_target_slider_to_its_steps_moves_nothing(monkeypatch):
+    from course.skeleton import chain
+
+    target = np.array([-0.6037, 1.7013, 0.0])  # between the sliders' steps
+    pg = controls.ik_playground(chain([1.0, 0.8, 0.6, 0.4], axes=[0, 0, 1]), methods=["ccd"],
+                                target=target)
+    try:
+        first = pg.result
+        solves = []
+        monkeypatch.setattr(pg, "solve", lambda: solves.append(1))
+        for c in "xy":  # as the browser does when it first shows the sliders
+            snapped = _browser_snap(pg.sliders[c], pg.sliders[c].value)
+            assert snapped != pg.sliders[c].value
+            pg.sliders[c].value = snapped
+        assert not solves and pg.result is first, "a rounding is not a move: no new solve"
+        np.testing.assert_array_equal(pg.target, target)  # the notebook's target, exactly
+        pg.sliders["x"].value = _browser_snap(pg.sliders["x"], target[0]) + pg.sliders["x"].step
+        assert solves == [1], "one step of the slider is a move"
+        assert pg.target[0] == pg.sliders["x"].value
+    finally:
+        pg.close()
+
+
+def test_full_body_targets_ignore_the_browser_rounding_their_sliders(sample_motion):
+    fb = controls.full_body_ik(sample_motion)
+    try:
+        name = fb.sliders["edit"].value
+        before, iterations = fb.targets[name].copy(), fb.result.iterations
+        for c in "xyz":
+            fb.sliders[c].value = _browser_snap(fb.sliders[c], fb.sliders[c].value)
+        np.testing.assert_array_equal(fb.targets[name], before)
+        assert fb.result.iterations == iterations
+        fb.sliders["y"].value = fb.sliders["y"].value + 5 * fb.sliders["y"].step
+        assert fb.targets[name][1] == pytest.approx(fb.root_position[1] + fb.sliders["y"].value)
+    finally:
+        fb.close()
+
+
 def test_ik_playground_convergence_plot_updates_in_place():
     from course.skeleton import chain
 
@@ -542,3 +603,11 @@ def test_ik_playground_frames_its_first_target_even_out_of_reach():
         assert np.all((uv > 0) & (uv < [w, h])), uv
     finally:
         pg.close()
+
+
+def test_readouts_never_print_minus_zero_nor_one_iterations():
+    assert controls._number(-1e-17) == "+0.000" and controls._number(-0.0004) == "+0.000"
+    assert controls._number(-0.0006) == "-0.001" and controls._number(-1e-9, ".2f") == "0.00"
+    assert controls._vec([-1e-12, 1.0]) == "(+0.000, +1.000)"
+    assert "-0.000" not in controls._matrix_html(np.array([[1.0, -1e-17], [-2e-16, 1.0]]))
+    assert controls._iterations(1) == "1 iteration" and controls._iterations(0) == "0 iterations"

@@ -44,6 +44,25 @@ def _set_sliders(sliders: dict[str, widgets.Widget], position: Array) -> None:
         s.value = float(np.clip(position[k], s.min, s.max))
 
 
+def _clipped(sliders: dict[str, widgets.Widget], position: Array) -> Array:
+    """``position (3,)`` clipped to the ranges of the x/y/z sliders."""
+    lo = np.array([sliders[c].min for c in "xyz"])
+    hi = np.array([sliders[c].max for c in "xyz"])
+    out: Array = np.clip(np.asarray(position, dtype=np.float64), lo, hi)
+    return out
+
+
+def _snapped(slider: widgets.Widget, old: float, new: float) -> bool:
+    """The browser moved ``old`` onto the slider's step grid (``min + n step``, the nearest
+    point): it does so when it shows a value that lies between two steps, and sends the
+    snapped value back. That is the same value to the student, not a move of theirs."""
+    step = slider.step
+    if not step:
+        return False
+    n = (new - slider.min) / step
+    return abs(new - old) <= step / 2 * (1 + 1e-9) and abs(n - round(n)) < 1e-6
+
+
 def _side_by_side(*children: widgets.Widget) -> widgets.HBox:
     """A row of panels that keep their width (the sliders and their numbers stay readable)
     beside views that shrink to fit a narrow notebook (see ``SkeletonScene.widget``); what
@@ -78,16 +97,28 @@ def _on_value(widget: widgets.Widget, handler: Any) -> None:
     widget.observe(latest_on_gl_thread(handler), names="value")
 
 
+def _number(x: float, fmt: str = "+.3f") -> str:
+    """``x`` in ``fmt``, and never ``-0.000`` (a tiny negative number, rounded)."""
+    text = format(float(x), fmt)
+    return format(0.0, fmt) if float(text) == 0 else text
+
+
 def _matrix_html(R: Array) -> str:
     rows = "".join(
-        "<tr>" + "".join(f"<td style='padding:0 8px;text-align:right'>{v:+.3f}</td>" for v in r)
+        "<tr>" + "".join(f"<td style='padding:0 8px;text-align:right'>{_number(v)}</td>"
+                         for v in r)
         + "</tr>" for r in R
     )
     return f"<table style='font-family:monospace'>{rows}</table>"
 
 
+def _iterations(n: int) -> str:
+    """``"1 iteration"``, ``"12 iterations"``."""
+    return f"{n} iteration{'' if n == 1 else 's'}"
+
+
 def _vec(v: ArrayLike, fmt: str = "+.3f") -> str:
-    return "(" + ", ".join(format(float(x), fmt) for x in np.ravel(v)) + ")"
+    return "(" + ", ".join(_number(x, fmt) for x in np.ravel(v)) + ")"
 
 
 class Control:
@@ -202,7 +233,7 @@ class SlerpExplorer(Control):
     """
 
     def __init__(self, start: ArrayLike = (0.0, 0.0, 0.0), end: ArrayLike = (20.0, 150.0, 60.0),
-                 t: float = 0.5) -> None:
+                 t: float = 0.25) -> None:
         self.sliders = {
             **{f"start{k}": _angle_slider(f"start {c}", v) for k, (c, v) in
                enumerate(zip("XYZ", np.ravel(start), strict=True))},
@@ -211,14 +242,16 @@ class SlerpExplorer(Control):
             "t": widgets.FloatSlider(value=t, min=0.0, max=1.0, step=0.01, description="t",
                                      **_slider_style(".2f")),
         }
-        # room for the table: a row per method, readable columns (the view is above it)
-        self.readout = _readout(6, "560px")
-        self.scene = FrameScene(3, labels=["LERP", "NLERP", "SLERP"], window_size=(780, 330))
+        # room for the table: a row per method, readable columns
+        self.readout = _readout(6, "470px")
+        self.scene = FrameScene(3, labels=["LERP", "NLERP", "SLERP"], window_size=(780, 300))
         self.q0, self.q1 = self._ends()
         self.arc = SlerpArcFigure(self.q0, self.q1, t=t)
-        self.arc_image = widgets.Image(format="png", width=330)
-        left = widgets.VBox([*self.sliders.values(), self.readout])
-        self.widget = widgets.VBox([self.scene.widget(), _side_by_side(left, self.arc_image)])
+        self.arc_image = widgets.Image(format="png", width=300)
+        # sliders, table and arc in one row under the view: the whole explorer fits a
+        # 1366x768 window (a narrower notebook wraps the arc under them)
+        self.widget = widgets.VBox([self.scene.widget(), _side_by_side(
+            widgets.VBox(list(self.sliders.values())), self.readout, self.arc_image)])
         for name, s in self.sliders.items():
             _on_value(s, self._changed_t if name == "t" else self._changed_ends)
         self._show()
@@ -270,8 +303,9 @@ class SlerpExplorer(Control):
 
 
 def slerp_explorer(start: ArrayLike = (0.0, 0.0, 0.0), end: ArrayLike = (20.0, 150.0, 60.0),
-                   t: float = 0.5) -> SlerpExplorer:
-    """Compare LERP / NLERP / SLERP: see :class:`SlerpExplorer` (angles in degrees)."""
+                   t: float = 0.25) -> SlerpExplorer:
+    """Compare LERP / NLERP / SLERP: see :class:`SlerpExplorer` (angles in degrees). It opens
+    at ``t = 0.25``: at 0.5, by symmetry, NLERP and SLERP agree."""
     return SlerpExplorer(start, end, t)
 
 
@@ -332,7 +366,7 @@ class FKExplorer(Control):
                                            selected_index=0 if groups else None)
         self.reset_button = _fixed(widgets.Button(description="reset", icon="undo"))
         self.reset_button.on_click(latest_on_gl_thread(lambda _b: self.reset()))
-        self.readout = _readout(3)
+        self.readout = _readout(4)  # R_j, Q_j, p_j: lines with subscripts are taller
         self.positions, self.orientations = skeleton.forward_kinematics(
             self.local_rotations, self.root_position)
         # frame the whole reach (the pose can turn anywhere), not just this pose
@@ -413,7 +447,8 @@ class BVHPlayer(Control):
     (label -> ``(F,)`` angles in radians, e.g. a knee's flexion) are plotted under the view
     with a cursor at the current frame. ``others`` (label -> ``(F, J, 3)`` joint positions of
     the same skeleton, e.g. a student's FK of the clip) are drawn beside it, frame by frame,
-    and ``name`` labels the clip's own skeleton.
+    and ``name`` labels the clip's own skeleton. ``targets`` (``(F, 3)`` or ``(F, K, 3)``,
+    e.g. the IK targets a clip was solved for) are drawn as target markers at each frame.
 
     Playback runs in the kernel, one picture at a time: the next frame is drawn only once the
     last picture has been sent, and frames are skipped to keep the clip's speed at the rate
@@ -426,6 +461,7 @@ class BVHPlayer(Control):
     def __init__(self, motion: Any, *, camera: str = "follow", display_fps: float = 30.0,
                  curves: Mapping[str, ArrayLike] | None = None,
                  others: Mapping[str, ArrayLike] | None = None, name: str | None = None,
+                 targets: ArrayLike | None = None,
                  clock: Callable[[], float] | None = None,
                  call_later: Callable[[float, Callable[[], None]], Any] | None = None) -> None:
         import time
@@ -438,6 +474,7 @@ class BVHPlayer(Control):
         n = self.positions.shape[0]
         self.others = {label: _clip_positions(label, p, self.positions.shape)
                        for label, p in (others or {}).items()}
+        self.targets = None if targets is None else _clip_targets(targets, n)
         self.pacer = PlaybackPacer(1.0 / motion.frame_time, max_pictures_per_s=display_fps)
         self._clock = clock or time.monotonic
         self._call_later = call_later or kernel_call_later
@@ -458,10 +495,12 @@ class BVHPlayer(Control):
                                        layout=widgets.Layout(width="200px")),
         }
         self.readout = _readout(1)
-        self.scene = SkeletonScene(window_size=(720, 480), camera="iso")
+        # with curves under it the view is lower: the player fits a 1366x768 window
+        self.scene = SkeletonScene(window_size=(720, 380 if curves else 480), camera="iso")
         self.name = name or motion.name or "motion"
         # framed on all the clips (the follow camera: about the first one's root)
-        everything = np.concatenate([self.positions, *self.others.values()], axis=1)
+        everything = np.concatenate([self.positions, *self.others.values(),
+                                     *([] if self.targets is None else [self.targets])], axis=1)
         self.scene.add_skeleton(motion.skeleton.parents, self.positions[0], name=self.name,
                                 frame_points=everything)
         for label, clip in self.others.items():
@@ -476,7 +515,7 @@ class BVHPlayer(Control):
             angles = np.column_stack([np.asarray(c, dtype=np.float64).reshape(n)
                                       for c in curves.values()])
             self.curves = JointAngleFigure(angles, motion.frame_time, list(curves),
-                                           figsize=(7.2, 2.4))
+                                           figsize=(7.2, 1.8))
             self.curves_image = widgets.Image(format="png", width=720)
         # playback sets the slider to the frame it shows: that is no new frame to draw
         _on_value(self.sliders["frame"],
@@ -535,6 +574,8 @@ class BVHPlayer(Control):
         self.frame = int(frame)
         for label, clip in self.others.items():  # one render, with the last
             self.scene.set_pose(clip[self.frame], name=label, render=False)
+        if self.targets is not None:
+            self.scene.set_targets(self.targets[self.frame], render=False)
         self.scene.set_pose(self.positions[self.frame], name=self.name)
         self._show_readout()
         if self.curves is not None:
@@ -553,10 +594,26 @@ def _clip_positions(label: str, positions: ArrayLike, shape: tuple[int, ...]) ->
     if p.shape != shape:
         raise ValueError(f"others[{label!r}] must have the clip's shape {shape} (frames, "
                          f"joints, 3), got {p.shape}")
-    if not np.isfinite(p).all():
-        frame = int(np.argwhere(~np.isfinite(p))[0, 0])
-        raise ValueError(f"others[{label!r}] is not finite at frame {frame}")
-    return p
+    return _finite_frames(f"others[{label!r}]", p)
+
+
+def _finite_frames(name: str, frames: Array) -> Array:
+    """``frames`` (F, ...) as they are, or an error naming the first frame not finite."""
+    if not np.isfinite(frames).all():
+        frame = int(np.argwhere(~np.isfinite(frames))[0, 0])
+        raise ValueError(f"{name} is not finite at frame {frame}")
+    return frames
+
+
+def _clip_targets(targets: ArrayLike, n_frames: int) -> Array:
+    """``targets`` as ``(F, K, 3)`` floats (``(F, 3)``: one per frame), or an error."""
+    t = np.asarray(targets, dtype=np.float64)
+    if t.ndim == 2:
+        t = t[:, None]
+    if t.ndim != 3 or t.shape[0] != n_frames or t.shape[2] != 3:
+        raise ValueError(f"targets must have shape ({n_frames}, 3) or ({n_frames}, K, 3) "
+                         f"(one row per frame of the clip), got {np.shape(targets)}")
+    return _finite_frames("targets", t)
 
 
 def bvh_player(motion: Any, *, camera: str = "follow",
@@ -699,6 +756,8 @@ class IKPlayground(Control):
             "iteration": widgets.IntSlider(value=0, min=0, max=0, description="iteration",
                                            **_slider_style("d")),
         }
+        # the target (the sliders show it, rounded to their steps by the browser)
+        self._goal = np.array([self.sliders[c].value for c in "xyz"])
         self.readout = _readout(5, "360px")  # a long method name wraps the first line
         self.scene = SkeletonScene(window_size=(640, 500), camera=_facing(normal) or "iso")
         # framed: the chain's reach and the first target (which may lie beyond it)
@@ -717,8 +776,8 @@ class IKPlayground(Control):
                        if self.scene.draggable else None)
         self.drag = None if self.handle is not None else _drag_pad(
             self.scene, center, reach, goal, self._dragged, size=96, normal=normal)
-        for name in ("x", "y", "z"):
-            _on_value(self.sliders[name], lambda _c: self._slider_moved())
+        for k, name in enumerate("xyz"):
+            _on_value(self.sliders[name], lambda c, k=k: self._slider_moved(k, c["new"]))
         for name in ("method", "tol", "max_iter"):
             _on_value(self.sliders[name], lambda _c: self.solve())
         _on_value(self.sliders["iteration"], lambda c: self.show_iteration(c["new"]))
@@ -730,20 +789,27 @@ class IKPlayground(Control):
 
     @property
     def target(self) -> Array:
-        return np.array([self.sliders[c].value for c in "xyz"])
+        """The target ``(3,)`` the solve aims at."""
+        return self._goal.copy()
 
-    def _slider_moved(self) -> None:
-        if not self._dragging:
-            self.scene.move_target_handle(self.target)
-            if self.drag is not None:
-                self.drag.show(self.target)
-            self.solve()
+    def _slider_moved(self, k: int, value: float) -> None:
+        """Target slider ``k`` moved to ``value``: move the target there and solve (not for
+        the browser's rounding of a value to the slider's steps, see :func:`_snapped`)."""
+        if self._dragging or _snapped(self.sliders["xyz"[k]], self._goal[k], value):
+            return
+        self._goal[k] = value
+        self.scene.move_target_handle(self.target)
+        if self.drag is not None:
+            self.drag.show(self.target)
+        self.solve()
 
     def _dragged(self, position: Array) -> None:
         """The handle was dragged to ``position``: the sliders follow, then one solve (a
         callback that did not move it, e.g. a click, changes nothing)."""
-        if np.allclose(position, self.target):
+        position = _clipped(self.sliders, position)
+        if np.allclose(position, self._goal):
             return
+        self._goal = position
         self._dragging = True
         try:
             _set_sliders(self.sliders, position)
@@ -782,8 +848,8 @@ class IKPlayground(Control):
     def _plot_convergence(self) -> None:
         """Blit the new residual curve into the figure made once."""
         residuals = np.asarray(self.result.residuals, dtype=np.float64)
-        self.convergence.update(residuals, self.sliders["tol"].value,
-                                f"{self.sliders['method'].value}: {residuals.size - 1} iterations")
+        title = f"{self.sliders['method'].value}: {_iterations(residuals.size - 1)}"
+        self.convergence.update(residuals, self.sliders["tol"].value, title)
         self.convergence_image.value = self.convergence.png()
 
     def show_iteration(self, k: int) -> None:
@@ -798,7 +864,7 @@ class IKPlayground(Control):
         state = "converged" if r.converged else f"not converged ({r.reason})"
         self.readout.value = (
             f"<b>{self.sliders['method'].value}</b>: {state} in "
-            f"<b>{r.iterations}</b> iterations<br>residual at iteration {k}: "
+            f"<b>{_iterations(r.iterations)}</b><br>residual at iteration {k}: "
             f"<b>{residual[min(k, residual.size - 1)]:.2e}</b> "
             f"(final {residual[-1]:.2e})"
             + _start_note(r)
@@ -877,10 +943,15 @@ class FullBodyIK(Control):
         _on_value(self.sliders["edit"], lambda _c: self._load_target())
         for k in ("root", "method"):
             _on_value(self.sliders[k], lambda _c: self.solve())
-        for c in "xyz":
-            _on_value(self.sliders[c], lambda _c: self._target_moved())
+        for k, c in enumerate("xyz"):
+            _on_value(self.sliders[c], lambda ch, k=k: self._target_moved(k, ch["new"]))
+        # the x/y/z sliders are offsets from the captured root joint (not world coordinates)
+        origin = widgets.HTML(f"target, from the captured <b>{sk.names[0]}</b>:",
+                              layout=widgets.Layout(margin="2px 0 0 8px"))
+        controls = list(self.sliders.values())
         self.widget = _side_by_side(
-            widgets.VBox([*self.sliders.values(), *_pad_row(self.drag), self.readout]),
+            widgets.VBox([*controls[:4], origin, *controls[4:], *_pad_row(self.drag),
+                          self.readout]),
             self.scene.widget())
         self._load_target()
 
@@ -902,11 +973,16 @@ class FullBodyIK(Control):
         self._editing = False
         self.solve()
 
-    def _target_moved(self) -> None:
+    def _target_moved(self, k: int, value: float) -> None:
+        """Target slider ``k`` moved to ``value`` (from the root): move the edited target and
+        solve (not for the browser's rounding to the slider's steps, see :func:`_snapped`)."""
         name = self.sliders["edit"].value
         if self._editing or name is None:
             return
-        self._take_target(name)
+        old = self.targets[name][k] - self.root_position[k]
+        if _snapped(self.sliders["xyz"[k]], old, value):
+            return
+        self.targets[name][k] = self.root_position[k] + value
         self._show_target(self.targets[name])
         self.solve()
 
@@ -916,21 +992,20 @@ class FullBodyIK(Control):
         if self.drag is not None:
             self.drag.show(position)
 
-    def _take_target(self, name: str) -> None:
-        """The edited effector's target from the x/y/z sliders (relative to the root)."""
-        self.targets[name] = self.root_position + np.array([self.sliders[c].value for c in "xyz"])
-
     def _dragged(self, position: Array) -> None:
         """The handle was dragged: the edited effector's target (and its sliders) follow."""
         name = self.sliders["edit"].value
-        if name is None or np.allclose(position, self.targets[name]):
+        if name is None:
             return
+        position = self.root_position + _clipped(self.sliders, position - self.root_position)
+        if np.allclose(position, self.targets[name]):
+            return
+        self.targets[name] = position
         self._editing = True
         try:
             _set_sliders(self.sliders, position - self.root_position)
         finally:
             self._editing = False
-        self._take_target(name)
         self.solve()
 
     def solve(self) -> None:
@@ -954,7 +1029,7 @@ class FullBodyIK(Control):
         self.readout.value = (
             f"root <b>{self.sliders['root'].value}</b>, {len(chosen)} effector(s): "
             f"{'converged' if r.converged else f'not converged ({r.reason})'}, "
-            f"{r.iterations} iterations, residual {residual[-1]:.2e}"
+            f"{_iterations(r.iterations)}, residual {residual[-1]:.2e}"
         )
 
 
