@@ -77,6 +77,20 @@ def test_on_the_main_thread_or_outside_a_kernel_it_runs_directly(monkeypatch):
     assert out[0].name == "subshell"
 
 
+def test_soon_waits_for_what_the_loop_has_queued_and_outside_a_kernel_runs_now(
+        kernel_loop, monkeypatch):
+    order = []
+    kernel_loop.add_callback(lambda: order.append("picture sent"))
+    _backend.soon(lambda: order.append("plot"))
+    assert order == [], "in a kernel it waits for the loop"
+    kernel_loop.add_callback(kernel_loop.stop)
+    kernel_loop.start()
+    assert order == ["picture sent", "plot"]
+    monkeypatch.setattr(_backend, "_kernel_loop", lambda: None)
+    _backend.soon(lambda: order.append("now"))
+    assert order[-1] == "now"
+
+
 def test_a_fast_drag_renders_its_latest_value_not_a_backlog(kernel_loop):
     seen = []
     observer = _backend.latest_on_gl_thread(

@@ -386,7 +386,7 @@ def test_dragging_the_target_moves_the_sliders_and_solves_once(monkeypatch):
     try:
         solves = []
         solve = pg.solve
-        monkeypatch.setattr(pg, "solve", lambda: (solves.append(1), solve()))
+        monkeypatch.setattr(pg, "solve", lambda **kw: (solves.append(1), solve(**kw)))
         pg._dragged(np.array([2.0, 3.0, 0.0]))
         assert len(solves) == 1, "three sliders moved but the target should be solved once"
         np.testing.assert_allclose(pg.target, [2.0, 3.0, 0.0])
@@ -412,7 +412,7 @@ def test_the_browser_rounding_a_target_slider_to_its_steps_moves_nothing(monkeyp
     try:
         first = pg.result
         solves = []
-        monkeypatch.setattr(pg, "solve", lambda: solves.append(1))
+        monkeypatch.setattr(pg, "solve", lambda **_kw: solves.append(1))
         for c in "xy":  # as the browser does when it first shows the sliders
             snapped = _browser_snap(pg.sliders[c], pg.sliders[c].value)
             assert snapped != pg.sliders[c].value

@@ -224,6 +224,16 @@ def latest_on_gl_thread(handler: Callable[[T], None]) -> Callable[[T], None]:
     return observer
 
 
+def soon(fn: Callable[[], None]) -> None:
+    """Run ``fn()`` once the kernel's loop has done what is already queued (e.g. sending a
+    3D picture over the network) when called on the GL thread of a kernel; else at once."""
+    loop = _kernel_loop() if threading.current_thread() is threading.main_thread() else None
+    if loop is None:
+        fn()
+        return
+    loop.add_callback(fn)
+
+
 def call_later(delay: float, fn: Callable[[], None]) -> None:
     """Run ``fn()`` on the kernel's main loop (the GL thread) in ``delay`` seconds, without
     blocking; outside a kernel there is no loop to run it (a RuntimeError says so)."""

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import Array
-from ._backend import latest_on_gl_thread
+from ._backend import latest_on_gl_thread, soon
 from .figures import ConvergenceFigure, GimbalFigure, JointAngleFigure, SlerpArcFigure
 from .scene import GHOST, FrameScene, SkeletonScene
 
@@ -779,7 +779,7 @@ class IKPlayground(Control):
         for k, name in enumerate("xyz"):
             _on_value(self.sliders[name], lambda c, k=k: self._slider_moved(k, c["new"]))
         for name in ("method", "tol", "max_iter"):
-            _on_value(self.sliders[name], lambda _c: self.solve())
+            _on_value(self.sliders[name], lambda _c: self.solve(plot_later=True))
         _on_value(self.sliders["iteration"], lambda c: self.show_iteration(c["new"]))
         sliders = list(self.sliders.values())
         left = widgets.VBox([*_beside_pad(sliders[:3], self.drag), *sliders[3:], self.readout,
@@ -801,7 +801,7 @@ class IKPlayground(Control):
         self.scene.move_target_handle(self.target)
         if self.drag is not None:
             self.drag.show(self.target)
-        self.solve()
+        self.solve(plot_later=True)
 
     def _dragged(self, position: Array) -> None:
         """The handle was dragged to ``position``: the sliders follow, then one solve (a
@@ -815,10 +815,11 @@ class IKPlayground(Control):
             _set_sliders(self.sliders, position)
         finally:
             self._dragging = False
-        self.solve()
+        self.solve(plot_later=True)
 
-    def solve(self) -> None:
-        """Solve IK from the start pose to the current target, recording every iterate."""
+    def solve(self, *, plot_later: bool = False) -> None:
+        """Solve IK from the start pose to the current target, recording every iterate (the
+        residual plot once the kernel has sent the 3D picture, with ``plot_later``)."""
         import course.ik
 
         name = self.skeleton.names[self.effector]
@@ -843,7 +844,10 @@ class IKPlayground(Control):
             self._solving = False
         self.scene.set_trail(self.frames[:, self.effector])
         self.show_iteration(it.value)  # the 3D view first: it is what the student drags
-        self._plot_convergence()
+        if plot_later:  # a student's move: the 3D picture goes out first, the PNG after it
+            soon(self._plot_convergence)
+        else:
+            self._plot_convergence()
 
     def _plot_convergence(self) -> None:
         """Blit the new residual curve into the figure made once."""
