@@ -79,3 +79,28 @@ def test_simulator_stops_when_explicit_euler_explodes():
     with pytest.raises(ValueError, match="^method: "):
         cloth_simulator(grid_cloth(3, 3), method="rk4")
     sim.close()
+
+
+def test_the_energy_readout_shows_every_part_and_they_add_up_to_e():
+    import re
+
+    sim = cloth_simulator(grid_cloth(8, 8), window_size=(240, 180))
+    try:
+        for _ in range(3):  # at rest, then falling: kinetic, spring and gravity all non-zero
+            sim.advance(10)
+            line = next(s for s in sim.readout.value.split("<br>") if s.startswith("energy"))
+            m = re.fullmatch(r"energy E = ([-+]\d+\.\d{4}) J = kinetic (\d+\.\d{4}) "
+                             r"\+ spring (\d+\.\d{4}) \+ gravity \(([-+]\d+\.\d{4})\)", line)
+            assert m, line
+            total, kinetic, spring, gravity = map(float, m.groups())
+            e = sim.cloth.system.energy(sim.x, sim.v)  # recomputed: E = T + U - sum m g.x
+            mg = -np.sum(sim.cloth.system.masses * (sim.x @ sim.cloth.system.gravity))
+            np.testing.assert_allclose([kinetic, spring, gravity, total],
+                                       [e.kinetic, e.spring, mg, e.kinetic + e.spring + mg],
+                                       atol=5e-5)
+            assert abs(kinetic + spring + gravity - total) <= 1.5e-4  # up to printed rounding
+            assert gravity < 0 < kinetic and spring > 0
+        sim.reset()
+        assert "-0.0000" not in sim.readout.value  # at rest: no negative zero
+    finally:
+        sim.close()

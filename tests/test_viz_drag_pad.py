@@ -3,7 +3,10 @@ in a planar arm's plane."""
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
+import subprocess
 
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
@@ -179,3 +182,85 @@ def test_a_planar_arm_is_posed_face_on_in_the_fk_explorer():
     finally:
         fk.close()
     assert controls.fk_explorer(chain([1.0, 0.8])).scene._camera == "iso"  # ball joints
+
+
+# The pad's own JavaScript, run in node with the little of the DOM it uses: a pointer at
+# (clientX, clientY) or a uv set from the kernel, and where it draws the dot / what it sends.
+_PAD_HARNESS = r"""
+import pad from "./pad.mjs";
+const [size, r, cssScale, presses, uvs] = JSON.parse(process.argv[2]);
+const element = () => ({
+  attrs: {}, style: {}, children: [], handlers: {},
+  setAttribute(k, v) { this.attrs[k] = Number(v) === Number(v) ? Number(v) : v; },
+  appendChild(c) { this.children.push(c); },
+  addEventListener(type, f) { this.handlers[type] = f; },
+  setPointerCapture() {},
+  getBoundingClientRect() {
+    const side = (size + 2) * cssScale;  // a 1 px border each side, then CSS scaling
+    return { left: 100, top: 40, width: side, height: side };
+  },
+});
+globalThis.document = { createElementNS: () => element() };
+let frame = [];
+globalThis.requestAnimationFrame = (f) => frame.push(f);
+const state = { size, dot_radius: r, uv: [0, 0] }, listeners = {};
+const model = { get: (k) => state[k], set: (k, v) => { state[k] = v; },
+                save_changes() {}, on: (e, f) => { listeners[e] = f; } };
+const el = element();
+pad.render({ model, el });
+const svg = el.children[0], dot = svg.children.find((c) => c.attrs.class === "course-drag-dot");
+const out = { pressed: [], placed: [] };
+for (const [x, y] of presses) {
+  svg.handlers.pointerdown({ clientX: x, clientY: y, pointerId: 1 });
+  frame.forEach((f) => f()); frame = [];
+  out.pressed.push({ cx: dot.attrs.cx, cy: dot.attrs.cy, r: dot.attrs.r, uv: state.uv });
+  svg.handlers.pointerup({});
+}
+for (const p of out.pressed) {  // the kernel sends back the uv it was sent
+  state.uv = p.uv; listeners["change:uv"]();
+  p.again = { cx: dot.attrs.cx, cy: dot.attrs.cy };
+}
+for (const uv of uvs) {
+  state.uv = uv; listeners["change:uv"]();
+  out.placed.push({ cx: dot.attrs.cx, cy: dot.attrs.cy });
+}
+console.log(JSON.stringify(out));
+"""
+
+
+@pytest.mark.skipif(shutil.which("node") is None, reason="needs node to run the pad's script")
+@pytest.mark.parametrize("css_scale", [1.0, 0.75])
+def test_the_pads_dot_is_never_cut_and_stays_under_the_pointer(tmp_path, css_scale):
+    from course.viz.drag_pad import DragPad
+
+    pad = DragPad()
+    size, r = pad.size, pad.dot_radius
+    (tmp_path / "pad.mjs").write_text(pad._esm)
+    (tmp_path / "run.mjs").write_text(_PAD_HARNESS)
+    # presses in drawing pixels (inside the 1 px border): edges, corners, beyond, inside
+    drawing = [(0, 0), (size, size), (-30, size / 2), (size + 30, 3), (size / 2, size / 2),
+               (40, 130), (r + 1, size - r - 1), (12.5, 150.25)]
+    presses = [[100 + (x + 1) * css_scale, 40 + (y + 1) * css_scale] for x, y in drawing]
+    corners = [[-1, -1], [1, 1], [-1, 1], [0, 0], [0.3, -0.8]]
+    run = subprocess.run(
+        [shutil.which("node"), str(tmp_path / "run.mjs"),
+         json.dumps([size, r, css_scale, presses, corners])],
+        capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout)
+    for (x, y), got in zip(drawing, out["pressed"], strict=True):
+        cx, cy = got["cx"], got["cy"]
+        assert got["r"] == r
+        # the whole dot inside the drawing, for any press (even outside the pad)
+        assert r < cx < size - r and r < cy < size - r, (x, y, cx, cy)
+        assert all(-1 <= c <= 1 for c in got["uv"])
+        inner = (r + 1, size - r - 1)
+        if inner[0] <= x <= inner[1] and inner[0] <= y <= inner[1]:  # the dot is where pressed
+            assert (cx, cy) == (pytest.approx(x, abs=1e-9), pytest.approx(y, abs=1e-9))
+        # that uv, set by the kernel, draws the dot at the same place: one mapping both ways
+        assert (got["again"]["cx"], got["again"]["cy"]) == (pytest.approx(cx), pytest.approx(cy))
+    centre = size / 2
+    np.testing.assert_allclose([[p["cx"], p["cy"]] for p in out["placed"]],
+                               [[r + 1, size - r - 1], [size - r - 1, r + 1],
+                                [r + 1, r + 1], [centre, centre],
+                                [centre + 0.3 * (centre - r - 1), centre + 0.8 * (centre - r - 1)]])

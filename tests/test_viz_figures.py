@@ -145,6 +145,21 @@ def test_joint_angle_cursor_moves_to_the_frame():
         JointAngleFigure(np.zeros((5, 3)), 0.1, ["a"])
 
 
+def test_joint_angle_legend_covers_no_curve_and_no_cursor():
+    t = np.linspace(0, 4, 400)
+    knees = np.radians(np.column_stack([60 * np.sin(3 * t) ** 2, 60 * np.cos(3 * t) ** 2]))
+    fig = JointAngleFigure(knees, 0.01, ["LeftLeg (knee) flexion", "RightLeg (knee) flexion"],
+                           figsize=(7.2, 2.4))
+    renderer = fig.figure.canvas.get_renderer()
+    legends = fig.figure.legends + [fig.ax.get_legend()] * (fig.ax.get_legend() is not None)
+    assert len(legends) == 1 and len(legends[0].get_texts()) == 2
+    box = legends[0].get_window_extent(renderer)
+    # the curves and the cursor (at any frame) are drawn inside the axes: the legend is not
+    assert not box.overlaps(fig.ax.get_window_extent(renderer))
+    assert box.y0 >= fig.ax.get_window_extent(renderer).y1
+    assert fig.figure.bbox.contains(box.x0, box.y0) and fig.figure.bbox.contains(box.x1, box.y1)
+
+
 def _no_full_draw(figure) -> None:
     def refuse() -> None:
         raise AssertionError("this update must blit, not redraw the figure")

@@ -147,6 +147,45 @@ def test_two_skeletons_have_distinct_colours_a_legend_and_a_ground(tmp_path):
         sc.close()
 
 
+@pytest.mark.parametrize("ghost_first", [True, False])
+def test_a_faint_ghost_under_a_coincident_pose_leaves_its_joints_clean(ghost_first):
+    """Where IK leaves joints in place the solid pose covers its ghost: no speckle of the
+    ghost's grey inside a joint's sphere or a bone's tube (z-fighting)."""
+    from course.viz.scene import GHOST
+
+    def render(ghost: bool):
+        sc = SkeletonScene(window_size=(480, 400), ground=False, camera="iso")
+        try:
+            if ghost and ghost_first:
+                sc.add_skeleton(PARENTS, POSE, name="start", color=GHOST, opacity=0.55)
+            sc.add_skeleton(PARENTS, POSE, name="IK", color=PALETTE[0])
+            if ghost and not ghost_first:
+                sc.add_skeleton(PARENTS, POSE, name="start", color=GHOST, opacity=0.55)
+            sc.plotter.remove_legend(render=False)  # the legend is not the point here
+            cam = sc.plotter.camera
+            towards = np.subtract(cam.position, cam.focal_point)
+            right = np.cross(cam.up, towards / np.linalg.norm(towards))
+            right /= np.linalg.norm(right)
+            uv = sc.project(POSE)
+            radius = np.linalg.norm(sc.project(POSE + 0.022 * sc._scale * right) - uv, axis=1)
+            return sc.screenshot().astype(int), uv, radius
+        finally:
+            sc.close()
+
+    alone, uv, radius = render(ghost=False)
+    both, _, _ = render(ghost=True)
+    assert radius.min() > 4  # joints big enough to have an inside
+    rows, cols = np.mgrid[:alone.shape[0], :alone.shape[1]]
+    inside = np.zeros(alone.shape[:2], bool)
+    for (c, r), rad in zip(uv, radius, strict=True):  # each sphere's disc, its rim left out
+        inside |= (cols - c) ** 2 + (rows - r) ** 2 < (rad - 1.5) ** 2
+    mids = np.round((uv[1:] + uv[PARENTS[1:]]) / 2).astype(int)  # the middle of each bone
+    diff = np.abs(both - alone).max(axis=2)
+    assert inside.sum() > 500
+    assert diff[inside].max() <= 8, "the ghost shows through the solid pose's joints"
+    assert diff[mids[:, 1], mids[:, 0]].max() <= 8, "the ghost shows through the bones"
+
+
 def test_targets_and_trail_update_in_place(scene):
     scene.set_targets([[40, 160, 0], [-40, 160, 0]])
     np.testing.assert_allclose(scene.target_positions, [[40, 160, 0], [-40, 160, 0]])
@@ -162,6 +201,38 @@ def test_targets_and_trail_update_in_place(scene):
         scene.push_trail([k, 0, 0])
     np.testing.assert_allclose(np.asarray(scene._trail.points)[:, 0], [2, 3, 4, 5])
     scene.clear_trail()
+
+
+def test_the_pole_is_a_violet_sphere_apart_from_the_red_target_and_in_the_legend():
+    from course.viz.scene import GHOST, POLE_COLOR, TARGET_COLOR
+
+    sc = SkeletonScene(window_size=(480, 400), ground=False, camera="front")
+    try:
+        sc.add_skeleton(PARENTS, POSE, name="start", color=GHOST, opacity=0.5)
+        sc.add_skeleton(PARENTS, POSE, name="two-link IK")
+        assert sc.pole_position is None and [n for n, _ in sc.legend_entries()] == [
+            "start", "two-link IK"]
+        target, pole = np.array([[40.0, 20.0, 0.0]]), np.array([-40.0, 20.0, 0.0])
+        sc.set_targets(target, render=False)
+        sc.set_pole(pole + 5.0, render=False)
+        mesh = sc._pole
+        sc.set_pole(pole)
+        assert sc._pole is mesh  # moved in place
+        np.testing.assert_allclose(sc.pole_position, pole)
+        assert sc.legend_entries()[-2:] == [("target", TARGET_COLOR), ("pole", POLE_COLOR)]
+        img = sc.screenshot().astype(int)
+        (tc, tr), (pc, pr) = np.round(sc.project(np.vstack([target, pole]))).astype(int)
+        sky_t, sky_p = img[tr, 0], img[pr, 0]
+        t_px, p_px = img[tr, tc], img[pr, pc]
+        # over the same sky: the target turns it red (r up, b down), the pole violet (r and g
+        # down, b kept); one is redder than blue, the other bluer than red
+        assert t_px[0] - t_px[2] > sky_t[0] - sky_t[2] + 40
+        assert p_px[2] - p_px[1] > sky_p[2] - sky_p[1] + 40 and p_px[0] < sky_p[0] - 40
+        assert t_px[0] > t_px[2] + 20 and p_px[2] > p_px[0] + 20
+        with pytest.raises(ValueError, match="position"):
+            sc.set_pole([np.nan, 0.0, 0.0])
+    finally:
+        sc.close()
 
 
 def test_bad_input_names_the_argument(scene):
@@ -240,10 +311,25 @@ def test_a_browser_view_is_sent_the_camera_only_when_it_moved(browser_scene):
     assert View.pushes == 3
 
 
-def test_a_browser_view_publishes_changes_at_once_and_the_whole_scene_when_still():
-    import asyncio
+class _FakeLoop:
+    """A clock and ``call_later`` that run only when told."""
 
-    from course.viz.scene import _send_changes_only
+    def __init__(self):
+        self.now, self.timers = 0.0, []
+
+    def call_later(self, delay, fn):
+        self.timers.append((self.now + delay, fn))
+
+    def advance(self, seconds):
+        self.now += seconds
+        while due := [t for t in self.timers if t[0] <= self.now]:  # (and timers they set)
+            self.timers = [t for t in self.timers if t[0] > self.now]
+            for _, fn in due:
+                fn()
+
+
+def test_a_browser_view_publishes_changes_at_once_and_the_whole_scene_when_still():
+    from course.viz.scene import BrowserDraws, _send_changes_only
 
     published, full = [], []
 
@@ -265,37 +351,26 @@ def test_a_browser_view_publishes_changes_at_once_and_the_whole_scene_when_still
         def update(self, **_kwargs):
             full.append(1)
 
+    loop = _FakeLoop()
     view = View()
-    assert _send_changes_only(view)
-
-    async def drag():
-        for _ in range(5):
-            view.update()
-            await asyncio.sleep(0.05)
-        assert not full, "the whole scene must wait until the view is still"
-        await asyncio.sleep(1.3)
-
-    asyncio.run(drag())
+    draws = BrowserDraws(clock=lambda: loop.now, call_later=loop.call_later)
+    assert _send_changes_only(view, draws)
+    view.update()  # no page has shown the scene: it will load the whole state, kept current
+    assert full == [1] and not published
+    draws.drawn()  # a page shows it: from now on it takes changes
+    for _ in range(5):  # a drag
+        view.update()
+        draws.drawn()
+        loop.advance(0.05)
+    assert full == [1], "the whole scene must wait until the view is still"
     assert published == [("trame.vtk.delta", {"window": "window", "new": False})] * 5
-    assert full == [1]
+    loop.advance(0.9)
+    assert full == [1], "not before a second has passed since the last change"
+    loop.advance(0.1)  # a second after the last change, once
+    assert full == [1, 1]
+    loop.advance(5.0)
+    assert full == [1, 1]
     assert not _send_changes_only(object()), "a view of another kind is left as it is"
-
-
-class _FakeLoop:
-    """A clock and ``call_later`` that run only when told."""
-
-    def __init__(self):
-        self.now, self.timers = 0.0, []
-
-    def call_later(self, delay, fn):
-        self.timers.append((self.now + delay, fn))
-
-    def advance(self, seconds):
-        self.now += seconds
-        due = [t for t in self.timers if t[0] <= self.now]
-        self.timers = [t for t in self.timers if t[0] > self.now]
-        for _, fn in due:
-            fn()
 
 
 def test_browser_draws_hold_back_all_but_the_newest_change_until_the_last_is_drawn():
@@ -371,3 +446,100 @@ def test_a_browser_view_sends_a_drag_at_the_pace_the_browser_draws():
     assert published == [1]
     draws.drawn()
     assert published == [1, 5], "the browser gets the newest state, not a backlog"
+
+
+def _turn(axis, degrees):
+    return Rotation.from_rotvec(np.radians(degrees) * np.asarray(axis, float)).as_matrix()
+
+
+def test_frame_scene_draws_equal_lengths_equally_in_every_frame():
+    """A parallel projection: the same axis is as long on screen in each frame, and the
+    frames stand on one row (LERP's shorter frame is shorter, not farther away)."""
+    from course.viz.scene import FrameScene
+
+    sc = FrameScene(3, labels=["LERP", "NLERP", "SLERP"], window_size=(780, 300))
+    try:
+        assert sc.plotter.camera.parallel_projection
+        origins = np.array(sc.offsets)
+        px = [sc.project(np.vstack([o, o + np.eye(3)])) for o in origins]
+        lengths = np.array([np.linalg.norm(p[1:] - p[0], axis=1) for p in px])  # (frame, axis)
+        np.testing.assert_allclose(lengths, np.broadcast_to(lengths[0], lengths.shape), atol=1e-6)
+        assert lengths.min() > 20
+        np.testing.assert_allclose([p[0, 1] for p in px], px[0][0, 1], atol=1e-6)  # one row
+        # and in the picture: the red (x) arrows, turned alike, are equally long
+        sc.set_rotations([_turn([0, 1, 0], 30)] * 3)
+        img = sc.screenshot().astype(int)
+        red = (img[..., 0] > 150) & (img[..., 1] < 110) & (img[..., 2] < 120)
+        spans = []
+        for p in px:
+            lo, hi = int(p[0, 0] - 5), int(p[0, 0] + 1.2 * lengths[0, 0])
+            cols = np.nonzero(red[:, lo:hi].any(axis=0))[0]
+            spans.append(cols.max() - cols.min())
+        assert max(spans) - min(spans) <= 2, spans
+    finally:
+        sc.close()
+
+
+ROTATION_SETS = {
+    "a1 v0": [np.zeros((3, 3)), Rotation.from_rotvec(np.pi * np.array([1, 2, 2]) / 3).as_matrix()],
+    "a1 v3": [np.zeros((3, 3)), _turn([1, 0, 0], 90) @ _turn([0, 0, 1], 90),
+              _turn([0, 0, 1], 90) @ _turn([1, 0, 0], 90)],
+    "down": [_turn([1, 0, 0], 90), _turn([0, 0, 1], -90), _turn([1, 0, 0], 180)],  # axes to -y
+    "random": list(Rotation.random(3, random_state=7).as_matrix()),
+}
+
+
+@pytest.mark.parametrize("case, labels, size", [
+    ("a1 v0", ["yours: not implemented yet", "reference"], None),
+    ("a1 v0", ["yours: not implemented yet", "reference"], (420, 380)),  # a narrow window
+    ("a1 v3", ["yours: not implemented yet", "reference", "b a (the other order)"], None),
+    ("a1 v3", ["yours: not implemented yet", "reference", "b a (the other order)"],
+     (1200, 380)),
+    ("down", ["LERP", "NLERP", "SLERP"], (780, 300)),
+    ("random", ["LERP", "NLERP", "SLERP"], (780, 300)),
+])
+def test_frame_scene_captions_sit_under_their_own_frame_clear_of_every_arrow(case, labels, size):
+    from course.viz.scene import FrameScene
+
+    rotations = ROTATION_SETS[case][:len(labels)]
+    sc = FrameScene(len(labels), labels=labels, window_size=size)
+    try:
+        sc.set_rotations(rotations, render=False)
+        arrows = sc.plotter.renderer.GetActors()
+
+        def picture(show_arrows: bool, captions: list[int]) -> np.ndarray:
+            for k, actor in enumerate(sc.label_actors):
+                actor.SetVisibility(k in captions)
+            for actor in arrows:
+                actor.SetVisibility(show_arrows)
+            return sc.screenshot().astype(int)
+
+        sky = picture(False, [])
+        drawn = np.abs(picture(True, []) - sky).max(axis=2) > 12  # arrows and world axes
+        assert drawn.sum() > 300
+        drawn |= np.roll(drawn, 2, 0) | np.roll(drawn, -2, 0)  # 2 px clear of them
+        drawn |= np.roll(drawn, 2, 1) | np.roll(drawn, -2, 1)
+        h, w = sky.shape[:2]
+        origins = sc.project(np.array(sc.offsets))
+        texts = []
+        for k in range(len(labels)):
+            text = np.abs(picture(False, [k]) - sky).max(axis=2) > 40
+            rows, cols = np.nonzero(text)
+            assert len(rows) > 30, f"caption {labels[k]!r} is not drawn"
+            assert not (text & drawn).any(), f"an arrow crosses {labels[k]!r}"
+            # whole, in the window, centred under its own frame, below its arrows' reach
+            assert rows.min() > 1 and rows.max() < h - 2 and cols.min() > 1 and cols.max() < w - 2
+            assert abs((cols.min() + cols.max()) / 2 - origins[k, 0]) < 12
+            assert rows.min() > origins[k, 1] + sc.REACH * sc.pixels_per_unit
+            texts.append(text)
+        for a in range(len(texts)):
+            for b in range(a + 1, len(texts)):
+                assert not (texts[a] & texts[b]).any(), "two captions overlap"
+        for actor in sc.label_actors:
+            actor.SetVisibility(True)
+        for actor in arrows:
+            actor.SetVisibility(True)
+    finally:
+        sc.close()
+    with pytest.raises(ValueError, match="labels"):
+        FrameScene(2, labels=["one"])

@@ -210,10 +210,13 @@ class ClothSimulator:
         self._show()
 
     def _show(self) -> None:
-        energy = self.cloth.system.energy(self.x, self.v)
+        # every term, so the parts add up to E; round(., 4) + 0.0 prints no "-0.0000"
+        e = self.cloth.system.energy(self.x, self.v)
+        total, kinetic, spring, gravity = (round(v, 4) + 0.0
+                                           for v in (e.total, e.kinetic, e.spring, e.gravity))
         lines = [f"t = {self.time:.3f} s ({self.steps} steps)",
-                 f"energy E = {energy.total:+.4f} J (kinetic {energy.kinetic:.4f}, "
-                 f"spring {energy.spring:.4f})"]
+                 f"energy E = {total:+.4f} J = kinetic {kinetic:.4f} + spring {spring:.4f} "
+                 f"+ gravity ({gravity:+.4f})"]
         if self.last is not None:
             s = self.last
             lines.append(f"Newton: {s.iterations} iterations, {s.backtracks} backtracks, "

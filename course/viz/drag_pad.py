@@ -24,12 +24,15 @@ from .._typing import Array
 
 _ESM = r"""
 function render({ model, el }) {
-  const size = model.get("size");
+  const size = model.get("size"), r = model.get("dot_radius"), border = 1;
+  // uv in [-1, 1]^2 spans the drawing inset by the dot's radius (and a pixel): at the
+  // pad's edge the whole dot stays visible
+  const inset = r + 1, span = size - 2 * inset;
   const ns = "http://www.w3.org/2000/svg";
   const svg = document.createElementNS(ns, "svg");
   svg.setAttribute("width", size);
   svg.setAttribute("height", size);
-  svg.style.cssText = "background:#f4f6fa;border:1px solid #c9d3e3;border-radius:4px;" +
+  svg.style.cssText = `background:#f4f6fa;border:${border}px solid #c9d3e3;border-radius:4px;` +
     "cursor:crosshair;touch-action:none;display:block";
   for (const [x1, y1, x2, y2] of [[size / 2, 0, size / 2, size], [0, size / 2, size, size / 2]]) {
     const line = document.createElementNS(ns, "line");
@@ -38,14 +41,13 @@ function render({ model, el }) {
     svg.appendChild(line);
   }
   const dot = document.createElementNS(ns, "circle");
-  dot.setAttribute("r", 9);
+  dot.setAttribute("r", r);
   dot.setAttribute("fill", "#e5484d");
   dot.setAttribute("class", "course-drag-dot");
   svg.appendChild(dot);
-  const place = () => {
-    const [u, v] = model.get("uv");
-    dot.setAttribute("cx", (u + 1) / 2 * size);
-    dot.setAttribute("cy", (1 - v) / 2 * size);
+  const place = ([u, v]) => {
+    dot.setAttribute("cx", inset + (u + 1) / 2 * span);
+    dot.setAttribute("cy", inset + (1 - v) / 2 * span);
   };
   let dragging = false, pending = null;
   const clip = (x) => Math.max(-1, Math.min(1, x));
@@ -53,11 +55,11 @@ function render({ model, el }) {
     if (pending) { model.set("uv", pending); model.save_changes(); pending = null; }
   };
   const move = (e) => {
-    const box = svg.getBoundingClientRect();
-    const uv = [clip((e.clientX - box.left) / box.width * 2 - 1),
-                clip(1 - (e.clientY - box.top) / box.height * 2)];
-    dot.setAttribute("cx", (uv[0] + 1) / 2 * size);
-    dot.setAttribute("cy", (1 - uv[1]) / 2 * size);
+    const box = svg.getBoundingClientRect();  // the border's box, maybe scaled by CSS
+    const x = (e.clientX - box.left) * (size + 2 * border) / box.width - border;
+    const y = (e.clientY - box.top) * (size + 2 * border) / box.height - border;
+    const uv = [clip((x - inset) / span * 2 - 1), clip(1 - (y - inset) / span * 2)];
+    place(uv);
     if (!pending) requestAnimationFrame(send);
     pending = uv;
   };
@@ -66,8 +68,8 @@ function render({ model, el }) {
   });
   svg.addEventListener("pointermove", (e) => { if (dragging) move(e); });
   svg.addEventListener("pointerup", () => { dragging = false; });
-  model.on("change:uv", () => { if (!dragging) place(); });
-  place();
+  model.on("change:uv", () => { if (!dragging) place(model.get("uv")); });
+  place(model.get("uv"));
   el.appendChild(svg);
 }
 export default { render };
@@ -75,11 +77,13 @@ export default { render };
 
 
 class DragPad(anywidget.AnyWidget):
-    """The square pad; ``uv`` is the dot in ``[-1, 1]^2`` (right, up)."""
+    """The square pad of side ``size`` pixels; ``uv`` is the dot's centre in ``[-1, 1]^2``
+    (right, up), which spans the pad inset by the dot's radius (so the dot is never cut)."""
 
     _esm = _ESM
     uv = traitlets.List(traitlets.Float(), default_value=[0.0, 0.0]).tag(sync=True)
     size = traitlets.Int(180).tag(sync=True)
+    dot_radius = traitlets.Int(9).tag(sync=True)
 
 
 class ViewPlaneDrag:

@@ -546,7 +546,9 @@ class JointAngleFigure:
         self.ax.set_ylabel("angle (deg)")
         self.ax.set_xlim(self.times[0], self.times[-1])
         self.ax.grid(True, color="#e3e7ec", lw=0.6)
-        self.ax.legend(loc="upper right", fontsize="small", frameon=False, ncol=min(3, len(labels)))
+        # above the axes: the curves fill their width and the cursor sweeps all of it
+        self.figure.legend(loc="outside upper center", fontsize="small", frameon=False,
+                           ncol=min(3, len(labels)))
         self.cursor = self.ax.axvline(0.0, color="#2b3440", lw=1.2, animated=True)
         self.figure.canvas.draw()
         self._background = self.figure.canvas.copy_from_bbox(self.figure.bbox)

@@ -48,7 +48,12 @@ PALETTE: tuple[tuple[str, str], ...] = (
 )
 #: (bone colour, joint colour) of a faint pose drawn for comparison (before IK, the capture).
 GHOST = ("#aab4bf", "#8793a0")
+#: joint and bone radii of a faint (``opacity < 1``) pose, relative to a solid one's
+FAINT_SIZE = 0.8
 TARGET_COLOR = "#e5484d"
+# a target's sphere, translucent, about twice a joint's: it shows around a hand's finger joints
+TARGET_RADIUS = 0.05
+POLE_COLOR = "#8e3bd1"  # violet, as the pole's diamond in the 2D figures (chain_plots.ACCENT)
 TRAIL_COLOR = "#d1347a"
 AXIS_COLORS = np.array([[230, 57, 70], [42, 170, 82], [44, 110, 230]], dtype=np.uint8)
 BACKGROUND = ("#f4f6fa", "#c9d3e3")  # bottom, top: a soft sky
@@ -218,6 +223,7 @@ class SkeletonScene:
         self._camera = camera
         self._follow: tuple[str, Array] | None = None  # (skeleton, root position at last move)
         self._targets: pv.PolyData | None = None
+        self._pole: pv.PolyData | None = None
         self._trail: pv.PolyData | None = None
         self._trail_count = 0
         self._widget: Any = None
@@ -249,6 +255,8 @@ class SkeletonScene:
         color : (bone colour, joint colour); default: the first entry of :data:`PALETTE` that
             no skeleton of the scene uses yet (a :data:`GHOST` beside it leaves blue first).
         axes : draw each joint's local frame (x red, y green, z blue).
+        opacity : below 1, a faint pose for comparison (drawn a little thinner, see
+            :data:`FAINT_SIZE`).
         frame_points : (..., 3) points the camera and floor must cover (e.g. a whole clip);
             default: this pose. Only the first skeleton sets the framing. A clip's frames
             ``(F, N, 3)`` whose point 0 is the root: the ``follow`` camera frames their
@@ -284,8 +292,11 @@ class SkeletonScene:
         bones.SetPoints(points.GetPoints())  # the same vtkPoints: one write moves both
         edges = np.column_stack([par[1:], np.arange(1, n)])
         bones.lines = _segments(edges)
-        joints_actor = _sphere_actor(points, radius=0.022 * s, browser=self._in_browser)
-        bones_actor, _ = _tube_actor(bones, radius=0.011 * s)
+        # a faint pose is drawn thinner: where a solid pose coincides with it (IK left a joint
+        # in place) the solid one hides it whole, instead of the two fighting over the depth
+        thin = FAINT_SIZE if opacity < 1.0 else 1.0
+        joints_actor = _sphere_actor(points, radius=0.022 * s * thin, browser=self._in_browser)
+        bones_actor, _ = _tube_actor(bones, radius=0.011 * s * thin)
         _shade(joints_actor, joint_color, opacity=opacity)
         _shade(bones_actor, bone_color, specular=0.25, opacity=opacity)
         actors = [bones_actor, joints_actor]
@@ -356,8 +367,12 @@ class SkeletonScene:
         )
 
     def legend_entries(self) -> list[tuple[str, str]]:
-        """(name, bone colour) of each skeleton, as the legend shows them."""
-        return [(s.name, s.bone_color) for s in self.skeletons.values()]
+        """(name, bone colour) of each skeleton, as the legend shows them; with a pole shown
+        (:meth:`set_pole`), also the target's and the pole's marker colours."""
+        entries = [(s.name, s.bone_color) for s in self.skeletons.values()]
+        if self._pole is not None:
+            entries += [("target", TARGET_COLOR), ("pole", POLE_COLOR)]
+        return entries
 
     def _legend_html(self) -> str:
         return "".join(
@@ -366,17 +381,18 @@ class SkeletonScene:
             f"</span>{name}</span>" for name, color in self.legend_entries())
 
     def _update_legend(self) -> None:
-        if len(self.skeletons) < 2:
+        if len(self.legend_entries()) < 2:
             return
         if self._in_browser:  # vtk.js draws no 2D actors: the legend is HTML above the view
             if self._legend is not None:
                 self._legend.value = self._legend_html()
             return
+        entries = self.legend_entries()
         self.plotter.remove_legend(render=False)
         self.plotter.add_legend(
-            [[s.name, s.bone_color] for s in self.skeletons.values()],
+            [list(entry) for entry in entries],
             bcolor="white", border=False, face="circle", loc="upper right",
-            size=(0.15, 0.06 * len(self.skeletons)),  # pyvista pads wider boxes off-screen
+            size=(0.15, 0.06 * len(entries)),  # pyvista pads wider boxes off-screen
         )
 
     # -- updating (per event, in place) ------------------------------------------------------
@@ -441,7 +457,7 @@ class SkeletonScene:
             if self._targets is not None:
                 self.plotter.remove_actor(self._targets_actor, render=False)
             self._targets = pv.PolyData(t.copy())
-            self._targets_actor = _sphere_actor(self._targets, radius=0.035 * self._scale,
+            self._targets_actor = _sphere_actor(self._targets, radius=TARGET_RADIUS * self._scale,
                                                 browser=self._in_browser)
             _shade(self._targets_actor, TARGET_COLOR, opacity=0.45)
             self.plotter.add_actor(self._targets_actor, reset_camera=False, pickable=False)
@@ -450,6 +466,28 @@ class SkeletonScene:
             self._targets.Modified()
         if render:
             self.render()
+
+    def set_pole(self, position: ArrayLike, *, render: bool = True) -> None:
+        """Show the pole (the point a middle joint bends towards) at ``position (3,)``: a
+        violet sphere, so it is not taken for a target, named in the legend."""
+        p = _as_positions(np.reshape(position, (1, 3)), 1, "position")
+        if self._pole is None:
+            self._pole = pv.PolyData(p.copy())
+            actor = _sphere_actor(self._pole, radius=TARGET_RADIUS * self._scale,
+                                  browser=self._in_browser)
+            _shade(actor, POLE_COLOR, opacity=0.6)
+            self.plotter.add_actor(actor, reset_camera=False, pickable=False)
+            self._update_legend()
+        else:
+            self._pole.points[:] = p
+            self._pole.Modified()
+        if render:
+            self.render()
+
+    @property
+    def pole_position(self) -> Array | None:
+        """The drawn pole ``(3,)``, or None."""
+        return None if self._pole is None else np.array(self._pole.points[0])
 
     @property
     def draggable(self) -> bool:
@@ -631,6 +669,10 @@ class SkeletonScene:
     def _capture(self, smooth: bool) -> NDArray[np.uint8]:
         # a view rendered in the browser suppresses VTK's own rendering: lift that for a picture
         suppressed, self.plotter.suppress_rendering = self.plotter.suppress_rendering, False
+        # the depth range of what is drawn now: one set before the actors were added spans
+        # 0.01 to 1000, too coarse a depth buffer to tell a joint from a ghost's just behind it
+        if not self._in_browser:  # (vtk.js sets its own)
+            self.plotter.renderer.ResetCameraClippingRange()
         try:
             smooth = smooth and not self.plotter.render_window.GetMultiSamples()
             if smooth:
@@ -672,7 +714,8 @@ class SkeletonScene:
             else:
                 self._widget = on_gl_thread(self._trame_view)
             self._widget.add_class("course-view")  # found by the browser tests
-            if self._in_browser and len(getattr(self, "skeletons", ())) > 1:
+            self._widget.add_class(f"course-view-{self.backend}")  # what they expect it to draw
+            if self._in_browser and len(self.legend_entries()) > 1:  # (a FrameScene: never)
                 import ipywidgets as widgets
 
                 self._legend = widgets.HTML(self._legend_html(),
@@ -687,6 +730,8 @@ class SkeletonScene:
         bundle is kept out of the student's output."""
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
+            if not self._in_browser:  # as in _capture
+                self.plotter.renderer.ResetCameraClippingRange()
             self.plotter.render()
             # the toolbar collapsed to one button in the corner: it covers nothing
             view = self.plotter.show(
@@ -755,7 +800,7 @@ class BrowserDraws:
         import time
 
         self.patience = float(patience)
-        self._clock = clock or time.monotonic
+        self.clock = clock or time.monotonic
         self.call_later = call_later or _event_loop_call_later  # the kernel's loop
         self._sent: collections.deque[float] = collections.deque()
         self._waiting: Callable[[], None] | None = None  # the newest change held back
@@ -764,7 +809,7 @@ class BrowserDraws:
 
     def pending(self) -> int:
         """Changes sent and not yet drawn (0 while the browser has never answered)."""
-        now = self._clock()
+        now = self.clock()
         while self._sent and now - self._sent[0] > self.patience:
             self._sent.popleft()
         return len(self._sent) if self.answers else 0
@@ -789,7 +834,7 @@ class BrowserDraws:
             self._send_waiting()
 
     def _send(self, send: Callable[[], None]) -> None:
-        self._sent.append(self._clock())
+        self._sent.append(self.clock())
         send()
 
     def _send_waiting(self) -> None:
@@ -811,21 +856,22 @@ def _send_changes_only(view: Any, draws: BrowserDraws | None = None) -> bool:
     (published at once) and the whole state (kept for a page that reloads), which the browser
     then applies a second time. Here a render publishes the changes only, paced by the
     browser's draws (``draws``, see :class:`BrowserDraws`); the whole state is refreshed once
-    the view has been still for a second. Views of another kind, or of a trame version without
-    these internals, are left as they are (returns False).
+    the view has been still for a second. Until a page has shown the scene (its first answer)
+    every render keeps the whole state: a page loads that state once, when it opens, and
+    takes only changes afterwards, so a state older than the page would stay on it. Views
+    of another kind, or of a trame version without these internals, are left as they are
+    (returns False).
     """
     render_window = getattr(view, "_VtkLocalView__view", None)
     helper = getattr(view, "_helper", None)
     if render_window is None or helper is None or not hasattr(view, "_widgets"):
         return False
-    import time
-
     draws = draws or BrowserDraws()
     full_update = view.update
     last = [0.0, False]  # time of the last change, whether a refresh is scheduled
 
     def refresh() -> None:  # one timer per quiet second, not one per render
-        wait = last[0] + 1.0 - time.monotonic()
+        wait = last[0] + 1.0 - draws.clock()
         if wait > 0:
             draws.call_later(wait, refresh)
             return
@@ -841,11 +887,14 @@ def _send_changes_only(view: Any, draws: BrowserDraws | None = None) -> bool:
                                  widgets=view._widgets if widgets is None else widgets,
                                  orientation_axis=orientation_axis)
             protocol.publish("trame.vtk.delta", delta)
-            last[0] = time.monotonic()
+            last[0] = draws.clock()
             if not last[1]:
                 last[1] = True
                 draws.call_later(1.0, refresh)
 
+        if not draws.answers:  # no page has shown the scene yet: it will load the whole of it
+            full_update(widgets=widgets, orientation_axis=orientation_axis)
+            return
         draws.send_or_wait(send)
 
     view.update = update
@@ -874,11 +923,20 @@ class FrameScene:
     """A rotated coordinate frame (x red, y green, z blue arrows) beside the faint world frame;
     :meth:`set_rotations` moves each frame by setting its actors' transform (nothing rebuilt).
 
+    The view is a parallel projection, so equal lengths look equal in every frame (a shorter
+    arrow is a shorter axis, not a farther one). The frames stand in a row across the screen,
+    each caption centred under its own frame, below every place its arrows can point.
+
     Parameters
     ----------
     n_frames : how many frames to show side by side (e.g. 3 for LERP / NLERP / SLERP).
-    labels : a caption under each frame.
+    labels : a caption under each frame (wrapped to the frame's width).
     """
+
+    #: world units between neighbouring frames, and the radius every arrow (turned any way,
+    #: its tip included) and the world frame's axes (1.15 long) stay inside
+    SPACING, REACH = 2.6, 1.2
+    FONT_SIZE, MARGIN = 18, 8  # caption size, and pixels kept clear at the window's edges
 
     def __init__(
         self,
@@ -887,6 +945,8 @@ class FrameScene:
         *,
         window_size: tuple[int, int] | None = None,
     ) -> None:
+        if labels is not None and len(labels) != n_frames:
+            raise ValueError(f"labels must have {n_frames} entries, got {len(labels)}")
         # the captions are VTK text, which vtk.js does not draw: rendered in the kernel
         self.backend = "server" if jupyter_backend() == "client" else jupyter_backend()
         self._in_browser = False
@@ -896,11 +956,20 @@ class FrameScene:
         self._camera_moved = False
         size = window_size or (max(420, 300 * n_frames), 380)
         self.plotter = _new_plotter(size)
-        self.offsets = [np.array([2.6 * (i - (n_frames - 1) / 2), 0.0, 0.0])
-                        for i in range(n_frames)]
+        # looking from the front, a little right and above; the frames in a row along the
+        # screen's right (horizontal), so none is lower or farther than another
+        d = np.array([0.45, 0.35, 1.0]) / np.linalg.norm([0.45, 0.35, 1.0])
+        right = np.cross([0.0, 1.0, 0.0], d)
+        right /= np.linalg.norm(right)
+        up = np.cross(d, right)
+        self.offsets = [self.SPACING * (i - (n_frames - 1) / 2) * right for i in range(n_frames)]
+        scale, captions, caption_px = self._layout(size, n_frames, labels)
+        self.pixels_per_unit = scale
         self._arrows: list[list[pv.Actor]] = []
+        self.label_actors: list[Any] = []
         arrow = [pv.Arrow(start=(0, 0, 0), direction=np.eye(3)[a], tip_length=0.22,
                           tip_radius=0.07, shaft_radius=0.028) for a in range(3)]
+        gap = 6.0 / scale  # between the lowest reach of the arrows and the caption's top
         for i, off in enumerate(self.offsets):
             for a in range(3):  # the world frame, faint and thin
                 ghost = pv.Line(off, off + 1.15 * np.eye(3)[a])
@@ -913,24 +982,46 @@ class FrameScene:
                                               reset_camera=False)
                 actors.append(actor)
             self._arrows.append(actors)
-            if labels is not None:
-                self.plotter.add_point_labels(
-                    [off + np.array([0, -1.05, 0])], [labels[i]], font_size=18,
+            if captions:
+                self.label_actors.append(self.plotter.add_point_labels(
+                    [off - (self.REACH + gap) * up], [captions[i]], font_size=self.FONT_SIZE,
                     shape=None, show_points=False, text_color="#2b3440", always_visible=True,
-                )
+                    justification_horizontal="center", justification_vertical="top",
+                    reset_camera=False))
         self.rotations = np.tile(np.eye(3), (n_frames, 1, 1))
-        # frames 2.6 apart, arrows up to 1.15 long; the view angle is vertical, so a wide
-        # window fits its width / aspect
-        radius = max(1.5, 1.5 * n_frames * size[1] / size[0])  # captions included
-        direction = np.array([0.45, 0.35, 1.0]) / np.linalg.norm([0.45, 0.35, 1.0])
+        # the row of frames and the captions under it, centred in the window: the frames'
+        # centre row is above the window's middle by half the captions' height
         camera = self.plotter.camera
-        camera.view_angle = 30.0
-        focal = np.array([0.0, 0.15, 0.0])
+        camera.parallel_projection = True
+        camera.parallel_scale = size[1] / (2 * scale)
+        focal = -(caption_px + 6.0) / 2 / scale * up
         camera.focal_point = tuple(focal)
-        camera.position = tuple(focal + 1.1 * radius / np.tan(np.radians(15.0)) * direction)
-        camera.up = (0.0, 1.0, 0.0)
+        camera.position = tuple(focal + 4 * self.SPACING * max(n_frames, 2) * d)
+        camera.up = tuple(up)
         self.plotter.renderer.camera_set = True
         self._widget: Any = None
+
+    @classmethod
+    def _layout(cls, size: tuple[int, int], n_frames: int, labels: Sequence[str] | None
+                ) -> tuple[float, list[str], float]:
+        """Pixels per world unit that fit the row of frames and the captions under it in
+        ``size``; the captions wrapped to a frame's width; their height in pixels."""
+        import textwrap
+
+        w, h = size
+        line = 1.25 * cls.FONT_SIZE
+        captions: list[str] = []
+        caption_px = 0.0
+        for _ in range(2):  # the scale depends on the captions' lines, their width on the scale
+            scale = min((w - 2 * cls.MARGIN) / (cls.SPACING * (n_frames - 1) + 2 * cls.REACH),
+                        (h - 2 * cls.MARGIN - 6.0 - caption_px) / (2 * cls.REACH))
+            if labels is None:
+                break
+            column = min(cls.SPACING * scale, w - 2 * cls.MARGIN) - 8  # a gap between captions
+            chars = max(6, int(column / (0.55 * cls.FONT_SIZE)))  # bold sans: ~0.55 em a letter
+            captions = ["\n".join(textwrap.wrap(text, chars)) or " " for text in labels]
+            caption_px = line * max(c.count("\n") + 1 for c in captions)
+        return float(scale), captions, caption_px
 
     def set_rotations(self, matrices: ArrayLike, *, render: bool = True) -> None:
         """Set each frame's linear map ``(n_frames, 3, 3)`` (a rotation, or a scaled one to
