@@ -766,7 +766,7 @@ class IKPlayground(Control):
                                 reach=reach)
         self.scene.add_skeleton(skeleton.parents, start_pos, name="solution")
         self.scene.add_trail(capacity=512)
-        self.convergence = ConvergenceFigure()
+        self.convergence = ConvergenceFigure(figsize=(4.6, 2.6))  # fits 1366x768 with the rest
         self.convergence_image = widgets.Image(format="png", width=420)
         self._solving = False
         self._dragging = False
@@ -921,7 +921,7 @@ class FullBodyIK(Control):
             # any joint can be pulled (a hand, an elbow); the tips are offered first
             "effectors": widgets.SelectMultiple(
                 options=leaves + [n for n in names if n not in leaves],
-                value=tuple(effectors), description="effectors", rows=6),
+                value=tuple(effectors), description="effectors", rows=5),
             "edit": widgets.Dropdown(options=list(effectors), description="edit target"),
             "method": widgets.Dropdown(options=list(methods),
                                        value=method or ("dls" if "dls" in methods else methods[0]),
@@ -942,7 +942,7 @@ class FullBodyIK(Control):
                        if self.scene.draggable else None)
         self.drag = None if self.handle is not None else _drag_pad(
             self.scene, box.mean(axis=0), float(np.ptp(box, axis=0).max()) / 2,
-            self.targets[effectors[0]], self._dragged)
+            self.targets[effectors[0]], self._dragged, size=160)
         _on_value(self.sliders["effectors"], lambda _c: self._effectors_changed())
         _on_value(self.sliders["edit"], lambda _c: self._load_target())
         for k in ("root", "method"):

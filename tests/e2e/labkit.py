@@ -6,7 +6,8 @@ reaches it, in ``window.__frames`` as absolute times in ms (``performance.timeOr
 performance.now()``, comparable across frames): an ``<img>`` that finished loading (the
 static view, a server-rendered trame image) or a WebGL draw call in a new animation frame
 (a view rendered in the browser by vtk.js). Key presses on the page are recorded in
-``window.__keys`` the same way.
+``window.__keys`` the same way, and WebGL draw calls are counted in ``window.__webgl``: a
+vtk.js view that drew, not trame's animated "Loading..." spinner (see :func:`webgl_drawn`).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ FRAME_PROBE = r"""
   const now = () => performance.timeOrigin + performance.now();
   window.__frames = [];
   window.__keys = [];
+  window.__webgl = 0;
   document.addEventListener('keydown', () => window.__keys.push(now()), true);
   // in the notebook itself only the 3D view's image counts (not a plot beside it)
   const top = window === window.top;
@@ -74,7 +76,9 @@ FRAME_PROBE = r"""
                         'drawArraysInstanced']) {
       const original = proto[name];
       if (!original) continue;
-      proto[name] = function (...args) { mark(); return original.apply(this, args); };
+      proto[name] = function (...args) {
+        window.__webgl += 1; mark(); return original.apply(this, args);
+      };
     }
   }
 })();
@@ -85,16 +89,28 @@ def chromium() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
-def _free_port() -> int:
+def free_port() -> int:
+    """A localhost TCP port free right now."""
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
 
 
+# a canvas and at least one WebGL draw call in the frame (a spinner draws none)
+WEBGL_DRAWN = "() => !!document.querySelector('canvas') && (window.__webgl || 0) > 0"
+
+
+def webgl_drawn(frame: Any, timeout_ms: float = 60_000) -> Any:
+    """Wait until ``frame`` (a client view's iframe, ``content_frame()``) has drawn with
+    WebGL: vtk.js showed the scene, not a "Loading..." spinner that only changes pixels.
+    Works with Playwright's sync API and, awaited, with its async one."""
+    return frame.wait_for_function(WEBGL_DRAWN, timeout=timeout_ms)
+
+
 @contextmanager
 def lab_server(root: Path, env: Mapping[str, str] | None = None) -> Iterator[str]:
     """JupyterLab serving ``root`` on a free localhost port; yields its base URL."""
-    port = _free_port()
+    port = free_port()
     # no "would you like news?" toast over the notebook
     notification = root / ".settings" / "@jupyterlab" / "apputils-extension"
     notification.mkdir(parents=True, exist_ok=True)

@@ -2,8 +2,9 @@
 3D view change, and the kernel stay alive: with the static image view that CI executes, the
 browser-rendered (vtk.js) view a student gets by default, and the server-rendered trame view
 in which the IK target is a sphere to drag; in the browser-rendered view the target is dragged
-on a pad in the view's plane instead. Screenshots go to test-artifacts/. Needs the Debian
-package `chromium`."""
+on a pad in the view's plane instead. A browser-rendered view counts as drawn only when vtk.js
+made WebGL draw calls in its iframe (trame's animated "Loading..." spinner also changes the
+screenshots). Screenshots go to test-artifacts/. Needs the Debian package `chromium`."""
 
 from __future__ import annotations
 
@@ -13,7 +14,17 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
-from labkit import KERNEL_IDLE, REPO, RUN_ALL, TOKEN, chromium, lab_server, launch_browser
+from labkit import (
+    FRAME_PROBE,
+    KERNEL_IDLE,
+    REPO,
+    RUN_ALL,
+    TOKEN,
+    chromium,
+    lab_server,
+    launch_browser,
+    webgl_drawn,
+)
 
 NOTEBOOK = Path(__file__).with_name("e2e_views.ipynb")
 DRAG_NOTEBOOK = Path(__file__).with_name("e2e_drag.ipynb")
@@ -52,7 +63,9 @@ def _notebook_page(base: str, notebook: Path, artifact: str):
     ARTIFACTS.mkdir(exist_ok=True)
     with sync_playwright() as p:
         browser = launch_browser(p)
-        page = browser.new_page(viewport={"width": 1400, "height": 1000})
+        context = browser.new_context(viewport={"width": 1400, "height": 1000})
+        context.add_init_script(FRAME_PROBE)  # counts the WebGL draws in the view's iframe
+        page = context.new_page()
         try:
             page.goto(f"{base}/lab/tree/{notebook.name}?reset&token={TOKEN}")
             page.wait_for_function("window.jupyterapp && document.querySelector('.jp-Notebook')",
@@ -71,6 +84,16 @@ def _kernel_alive(page) -> bool:
     return page.evaluate(KERNEL_IDLE.replace(" === 'idle'", " !== 'dead'"))
 
 
+def _webgl_draws(view) -> int:
+    """WebGL draw calls so far in a browser-rendered view's iframe, once it has drawn."""
+    frame = view.element_handle().content_frame()
+    try:
+        webgl_drawn(frame)
+    except Exception:
+        raise AssertionError("vtk.js never drew in the view's iframe (a spinner?)") from None
+    return frame.evaluate("() => window.__webgl")
+
+
 def test_slider_moves_the_skeleton_in_jupyterlab(lab):
     base, backend = lab
     with _notebook_page(base, NOTEBOOK, f"e2e_{backend}") as page:
@@ -83,6 +106,7 @@ def test_slider_moves_the_skeleton_in_jupyterlab(lab):
         widget_area = page.locator(".jp-OutputArea-output").last
         widget_area.scroll_into_view_if_needed()
         page.wait_for_timeout(500 if backend == "static" else 6000)
+        draws_before = _webgl_draws(view) if backend == "client" else 0
         text_before = readout.inner_text()
         image_before = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_before.png"))
         widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_before.png"))
@@ -104,10 +128,13 @@ def test_slider_moves_the_skeleton_in_jupyterlab(lab):
         text_after = readout.inner_text()
         image_after = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_after.png"))
         widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_after.png"))
+        draws_after = _webgl_draws(view) if backend == "client" else 0
         alive = _kernel_alive(page)
     assert alive, "the kernel died while the slider moved"
     assert text_after != text_before
     assert image_after != image_before, "the 3D view did not change"
+    if backend == "client":
+        assert draws_after > draws_before, "vtk.js drew nothing after the slider moved"
 
 
 @pytest.mark.parametrize("lab", ["server"], indirect=True)
@@ -156,6 +183,7 @@ def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
         view.wait_for(state="visible", timeout=60_000)
         dot.scroll_into_view_if_needed()
         page.wait_for_timeout(5000)  # the view's first frame
+        draws_before = _webgl_draws(view)
         readouts = page.locator(".widget-slider .widget-readout")
         before = [readouts.nth(k).inner_text() for k in range(3)]
         image_before = view.screenshot(path=str(ARTIFACTS / "e2e_pad_before.png"))
@@ -185,7 +213,9 @@ def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
         page.wait_for_timeout(3000)
         after = [readouts.nth(k).inner_text() for k in range(3)]
         image_after = view.screenshot(path=str(ARTIFACTS / "e2e_pad_after.png"))
+        draws_after = _webgl_draws(view)
         alive = _kernel_alive(page)
     assert alive, "the kernel died while the target was dragged"
     assert after != before, "dragging the pad did not move the target sliders"
     assert image_after != image_before, "the 3D view did not change"
+    assert draws_after > draws_before, "vtk.js drew nothing after the target moved"

@@ -2,19 +2,28 @@
 
 Each notebook (found by glob, so new ones join by themselves) is opened in one live
 JupyterLab in headless Chromium with the default 3D view, all cells run, and for every
-interactive view (``.course-view``) at 1366x768 and again at 1920x1080:
+interactive view at 1366x768 and again at 1920x1080:
 
 - the view and its controls lie inside the output area and inside the window's width,
+- the whole output (view, sliders, readouts, plots under it) is no taller than the part of
+  the notebook the window shows, so a student sees all of it at once,
 - no visible button has zero height,
-- the picture is not blank, and what is drawn in colour (the skeleton, its joints, the
-  target, the frames' arrows) keeps clear of the view's edges and spans at least a quarter
-  of its shorter side;
+- the picture is not blank; in a 3D view what is drawn in colour (the skeleton, its joints,
+  the target, the frames' arrows) keeps clear of the view's edges and spans at least a
+  quarter of its shorter side; a view drawn in the browser has made WebGL draw calls, and
+  one rendered in the kernel has shown a streamed image (trame's animated "Loading..."
+  spinner changes pixels too, but is neither);
 
-then the first slider of the view is moved to both ends (Home, End) and all of it is checked
-again. A gimbal explorer (01) is also set to Y = 90 degrees: the lock warning shows, and the
-view, the rings picture and the controls stay inside the output where they were. Some shots
-must exist (``REQUIRED``: 04's pole scene at both ends of its slider, the a2 walk at its first
-and last frame), so a view that stops answering its slider cannot drop out unnoticed. Every
+then, at 1366x768, the first slider of the view is moved to both ends (Home, End) and all of
+it is checked again; the start is typed back into the slider's readout, and every readout
+must read as at the start before the 1920x1080 "start" is shot. An interactive view is a 3D
+view (``.course-view``) or, in an output with a slider or a play button and no 3D view, its
+largest image: a matplotlib explorer (11's Runge and spline explorers), found without any
+class so that a new one cannot be missed. A gimbal explorer (01) is also set to Y = 90
+degrees: the lock warning shows, and the view, the rings picture and the controls stay inside
+the output where they were. Some shots must exist (``REQUIRED``: 04's pole scene at both ends
+of its slider, the a2 walk at its first and last frame, 11's two explorers), so a view that
+stops answering its slider cannot drop out unnoticed. Every
 screenshot goes into ``tests/e2e/artifacts/gallery.html``, one page to scan. Notebooks run a
 few at a time in one browser; ``GALLERY_ONLY=01_,a2`` runs those whose path contains one of
 the comma-separated parts (a quick look at what you changed).
@@ -33,7 +42,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from labkit import ALL_RUN, FRAME_PROBE, KERNEL_IDLE, REPO, RUN_ALL, TOKEN, chromium, lab_server
+from labkit import (
+    ALL_RUN,
+    FRAME_PROBE,
+    KERNEL_IDLE,
+    REPO,
+    RUN_ALL,
+    TOKEN,
+    chromium,
+    lab_server,
+    webgl_drawn,
+)
 
 ARTIFACTS = Path(__file__).resolve().parent / "artifacts"
 ONLY = [part for part in os.environ.get("GALLERY_ONLY", "").split(",") if part]
@@ -48,10 +67,31 @@ REQUIRED = {
     "notebooks/01_rotations.ipynb": ("Y=90",),
     "notebooks/04_two_link_ik.ipynb": ("min (pole angle", "max (pole angle"),
     "assignments/a2_forward_kinematics.ipynb": ("min (frame", "max (frame"),
+    "notebooks/11_keyframes.ipynb": ("min (keys n", "min (p0"),
 }
 SIZES = ((1366, 768), (1920, 1080))
 PARALLEL = int(os.environ.get("GALLERY_PARALLEL", "3"))
 SETTLE_S = 2.0  # after a change: the kernel answers, the browser draws
+FIT_MARGIN = 8  # px the output must leave of the notebook's visible height
+
+# The interactive views, marked ``data-gallery-view="k"`` for the locators: every 3D view, and
+# in an output with a slider or a play button but no 3D view its largest image (a figure drawn
+# by matplotlib). Returns their kinds in that order, "scene" or "plot".
+FIND_VIEWS = """() => {
+  const views = [];
+  const area = (e) => { const r = e.getBoundingClientRect(); return r.width * r.height; };
+  for (const out of document.querySelectorAll('.jp-OutputArea-output')) {
+    const scenes = [...out.querySelectorAll('.course-view')];
+    const images = [...out.querySelectorAll('.widget-image')];
+    if (scenes.length) {
+      views.push(...scenes.map(e => [e, 'scene']));
+    } else if (images.length && out.querySelector('.widget-slider, .widget-play')) {
+      views.push([images.reduce((a, b) => area(b) > area(a) ? b : a), 'plot']);
+    }
+  }
+  views.forEach(([e], k) => e.setAttribute('data-gallery-view', String(k)));
+  return views.map(([, kind]) => kind);
+}"""
 
 # Geometry of every view's output, from the DOM: the output area, the view, its controls.
 GEOMETRY = """(view) => {
@@ -63,7 +103,10 @@ GEOMETRY = """(view) => {
   const controls = [...out.querySelectorAll(
       '.widget-slider, .widget-dropdown, .widget-button, button, .widget-play, .widget-html,'
       + ' .widget-image, .widget-checkbox, .widget-select-multiple, .course-view')].filter(shown);
+  // the part of the notebook the window shows (under the toolbar, above the status bar)
+  const panel = view.closest('.jp-WindowedPanel-outer') || view.closest('.jp-Notebook');
   return {out: box(out), view: box(view), window: window.innerWidth,
+          visible: panel ? panel.clientHeight : window.innerHeight,
           controls: controls.map(e => ({cls: e.className.toString().slice(0, 60), ...box(e)})),
           buttons: [...out.querySelectorAll('button')].filter(shown).map(box)};
 }"""
@@ -95,13 +138,16 @@ def _drawn_box(image: np.ndarray) -> tuple[int, int, int, int] | None:
     return int(xs.min()), int(ys.min()), int(xs.max()), int(ys.max())
 
 
-def _check_picture(png: bytes) -> list[str]:
+def _check_picture(png: bytes, kind: str) -> list[str]:
+    """A plot is not blank; a 3D view also shows a skeleton inside it, large enough."""
     from PIL import Image
 
     image = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
     h, w = image.shape[:2]
     if image.std() < 4:
         return ["the picture is blank"]
+    if kind == "plot":  # axes, ticks and labels reach its edges by design
+        return []
     box = _drawn_box(image)
     if box is None:
         return ["nothing drawn in colour (no skeleton)"]
@@ -126,6 +172,9 @@ def _check_geometry(g: dict) -> list[str]:
         elif c["left"] < out["left"] - tol or c["right"] > out["right"] + tol:
             problems.append(f"{c['cls'] or 'a control'} [{c['left']:.0f}, {c['right']:.0f}] "
                             f"leaves the output area [{out['left']:.0f}, {out['right']:.0f}]")
+    if out["height"] > g["visible"] - FIT_MARGIN:
+        problems.append(f"the output is {out['height']:.0f} px tall, the notebook shows "
+                        f"{g['visible']} px: it cannot be seen at once")
     if any(b["height"] < 1 for b in g["buttons"]):
         problems.append("a button has zero height")
     v = g["view"]
@@ -151,24 +200,53 @@ async def _first_picture(view, timeout_s: float = 30.0) -> None:
         await asyncio.sleep(0.5)
 
 
+def _output(view):
+    return view.locator("xpath=ancestor::div[contains(@class, 'jp-OutputArea-output')][1]")
+
+
+# a picture the kernel rendered reached the iframe (an image loaded or painted, see labkit)
+STREAM_SHOWN = "() => (window.__frames || []).length > 0"
+
+
+async def _live_problems(view) -> list[str]:
+    """A live view's iframe shows a picture, not trame's "Loading..." spinner: one the kernel
+    chose to draw in the browser (``.course-view-client``) has made WebGL draw calls, one it
+    renders itself (``.course-view-server``, e.g. 01's frames with their captions) has shown
+    a streamed image."""
+    iframe = view.locator("iframe")
+    if await iframe.count() == 0:
+        return []
+    frame = await (await iframe.first.element_handle()).content_frame()
+    client = await view.evaluate("e => e.classList.contains('course-view-client')")
+    try:
+        if client:
+            await webgl_drawn(frame, 60_000)
+        else:
+            await frame.wait_for_function(STREAM_SHOWN, timeout=60_000)
+    except Exception:
+        return ["vtk.js never drew in the view's iframe (a spinner is not a picture)" if client
+                else "no rendered image reached the view's iframe (a spinner is not a picture)"]
+    return []
+
+
 async def _shoot(page, view, shots: list[Shot], notebook: str, size, k: int,
-                 state: str) -> None:
+                 state: str, kind: str) -> None:
     await view.scroll_into_view_if_needed()
+    problems = []
     if state == "start":
+        problems += await _live_problems(view)
         await _first_picture(view)
-    output = view.locator("xpath=ancestor::div[contains(@class, 'jp-OutputArea-output')][1]")
     slug = re.sub(r"[^A-Za-z0-9=]+", "_", state).strip("_")
     name = f"{notebook.replace('/', '_').removesuffix('.ipynb')}_{size[0]}_v{k}_{slug}.png"
-    await output.screenshot(path=str(ARTIFACTS / name))
-    problems = _check_geometry(await view.evaluate(GEOMETRY))
-    problems += _check_picture(await view.screenshot())
+    await _output(view).screenshot(path=str(ARTIFACTS / name))
+    problems += _check_geometry(await view.evaluate(GEOMETRY))
+    problems += _check_picture(await view.screenshot(), kind)
     shots.append(Shot(notebook, size, k, state, name, problems))
 
 
 async def _slider_end(page, view, key: str) -> str | None:
     """Press ``key`` on the output's first slider; its label, or None when it has none."""
-    output = view.locator("xpath=ancestor::div[contains(@class, 'jp-OutputArea-output')][1]")
-    sliders = output.locator(".widget-slider")
+    sliders = _output(view).locator(".widget-slider")
     if await sliders.count() == 0:
         return None
     handle = sliders.first.locator(".noUi-handle")
@@ -186,6 +264,35 @@ async def _type_into_slider(page, slider, value: str) -> None:
     await page.keyboard.press("Control+A")
     await page.keyboard.type(value)
     await page.keyboard.press("Enter")
+    await readout.evaluate("e => e.blur()")  # no focus ring in the next shot
+
+
+async def _readouts(view) -> list[str]:
+    """What every slider of the view's output reads."""
+    texts = await _output(view).locator(".widget-slider .widget-readout").all_inner_texts()
+    return [t.strip() for t in texts]
+
+
+async def _restore_start(page, view, start: list[str]) -> list[str]:
+    """Type the start back into the moved first slider's readout (Home would leave it at its
+    minimum), then into any other slider its move changed (an IK playground's iteration
+    slider jumps to the last sweep of the new solve, where a notebook had set another);
+    the problems when the sliders then do not read as at the start."""
+    sliders = _output(view).locator(".widget-slider")
+    for k in range(len(start)):
+        now = await _readouts(view)
+        if now[k] == start[k]:
+            continue
+        slider = sliders.nth(k)
+        if not await slider.locator(".widget-readout").is_visible():
+            return [f"the start cannot be restored: slider {k} shows no readout"]
+        # d3-format writes a minus sign (U+2212) that the readout does not parse back
+        await _type_into_slider(page, slider, start[k].replace("\u2212", "-"))
+        await _wait_settled(page, 1.0)
+    now = await _readouts(view)
+    if now != start:
+        return [f"not back at the start: the sliders read {now}, at the start {start}"]
+    return []
 
 
 # where the view, the rings picture and the warning are, from the DOM
@@ -204,8 +311,7 @@ BOXES = """(view) => {
 async def _gimbal_lock(page, view, shots: list[Shot], notebook: str, size, k: int) -> None:
     """A gimbal explorer (a slider "Y (#2)" and a rings picture) at Y = 90 degrees: the
     warning shows; the view, the rings and the controls stay inside the output, unmoved."""
-    output = view.locator("xpath=ancestor::div[contains(@class, 'jp-OutputArea-output')][1]")
-    slider = output.locator(".widget-slider").filter(
+    slider = _output(view).locator(".widget-slider").filter(
         has=page.locator(".widget-label", has_text="(#2)"))
     if await slider.count() == 0:
         return
@@ -214,7 +320,7 @@ async def _gimbal_lock(page, view, shots: list[Shot], notebook: str, size, k: in
     before = await view.evaluate(BOXES)
     await _type_into_slider(page, slider, "90")
     await _wait_settled(page)
-    await _shoot(page, view, shots, notebook, size, k, "Y=90")
+    await _shoot(page, view, shots, notebook, size, k, "Y=90", "scene")
     after = await view.evaluate(BOXES)
     problems = shots[-1].problems
     if after["warning"] is None:
@@ -261,25 +367,27 @@ async def _gallery_of(browser, base: str, notebook: str) -> list[Shot]:
         if tracebacks:
             shots.append(Shot(notebook, SIZES[0], -1, "run", "", [
                 f"a cell failed: {tracebacks[0][-300:]}"]))
-        views = page.locator(".course-view")
-        n = await views.count()
+        kinds = await page.evaluate(FIND_VIEWS)
+        not_restored: dict[int, list[str]] = {}
         for size in SIZES:
             await page.set_viewport_size({"width": size[0], "height": size[1]})
             await asyncio.sleep(1.0)
-            for k in range(n):
-                view = views.nth(k)
-                await _shoot(page, view, shots, notebook, size, k, "start")
+            for k, kind in enumerate(kinds):
+                view = page.locator(f"[data-gallery-view='{k}']")
+                await _shoot(page, view, shots, notebook, size, k, "start", kind)
+                shots[-1].problems[:0] = not_restored.get(k, [])
                 await _gimbal_lock(page, view, shots, notebook, size, k)
                 if size != SIZES[0]:
                     continue  # the slider's ends once, at the small size (where it is tight)
+                start = await _readouts(view)
                 for key, state in (("Home", "min"), ("End", "max")):
                     label = await _slider_end(page, view, key)
                     if label is None:
                         break
                     await _wait_settled(page)
-                    await _shoot(page, view, shots, notebook, size, k, f"{state} ({label})")
-                if await _slider_end(page, view, "Home"):  # back to a start for the big size
-                    await _wait_settled(page, 1.0)
+                    await _shoot(page, view, shots, notebook, size, k, f"{state} ({label})", kind)
+                else:  # both ends shot: back to the start for the big size
+                    not_restored[k] = await _restore_start(page, view, start)
         missing = [s for s in REQUIRED.get(notebook, ())
                    if not any(shot.state.startswith(s) for shot in shots)]
         if missing:
@@ -345,8 +453,9 @@ def _write_gallery(results: dict[str, list[Shot]]) -> Path:
             ".ok{color:#1a7f37}.bad{color:#b42318;font-weight:bold}</style>"
             "<h1>The live views, as a student sees them</h1>"
             f"<p>{len(results)} notebooks, window sizes "
-            f"{', '.join(f'{w}x{h}' for w, h in SIZES)}; each view at its start and with its "
-            "first slider at both ends.</p>" + "".join(rows))
+            f"{', '.join(f'{w}x{h}' for w, h in SIZES)}; each view at its start, with its "
+            f"first slider at both ends ({SIZES[0][0]} only), and back at its start for "
+            f"{SIZES[1][0]}.</p>" + "".join(rows))
     path = ARTIFACTS / "gallery.html"
     path.write_text(page)
     return path

@@ -38,9 +38,9 @@ from labkit import (
     FRAME_PROBE,
     KERNEL_IDLE,
     RUN_ALL,
-    _free_port,
     chromium,
     frames_after,
+    free_port,
     kernel_alive,
     launch_browser,
 )
@@ -68,7 +68,7 @@ def _missing() -> str | None:
 @contextmanager
 def hub_server(root: Path) -> Iterator[str]:
     """A JupyterHub serving from ``root`` on free localhost ports; yields its public URL."""
-    port = _free_port()
+    port = free_port()
     (root / "home").mkdir()
     for user in (PROXY_USER, NO_PROXY_USER):
         (root / "home" / user).mkdir()
@@ -84,8 +84,8 @@ def hub_server(root: Path) -> Iterator[str]:
         **{k: v for k, v in os.environ.items() if k != "PYVISTA_JUPYTER_BACKEND"},
         "COURSE_HUB_ROOT": str(root),
         "COURSE_HUB_PORT": str(port),
-        "COURSE_HUB_API_PORT": str(_free_port()),
-        "COURSE_HUB_PROXY_API_PORT": str(_free_port()),
+        "COURSE_HUB_API_PORT": str(free_port()),
+        "COURSE_HUB_PROXY_API_PORT": str(free_port()),
         "COURSE_HUB_PASSWORD": PASSWORD,
         "COURSE_HUB_NO_PROXY_USER": NO_PROXY_USER,
         "COURSE_HUB_PYTHON": sys.executable,
