@@ -15,18 +15,17 @@ interactive view at 1366x768 and again at 1920x1080:
   spinner changes pixels too, but is neither);
 
 then, at 1366x768, the first slider of the view is moved to both ends (Home, End) and all of
-it is checked again; the start is typed back into the slider's readout, and every readout
-must read as at the start before the 1920x1080 "start" is shot. An interactive view is a 3D
-view (``.course-view``) or, in an output with a slider or a play button and no 3D view, its
-largest image: a matplotlib explorer (11's Runge and spline explorers), found without any
-class so that a new one cannot be missed. A gimbal explorer (01) is also set to Y = 90
-degrees: the lock warning shows, and the view, the rings picture and the controls stay inside
-the output where they were. Some shots must exist (``REQUIRED``: 04's pole scene at both ends
-of its slider, the a2 walk at its first and last frame, 11's two explorers), so a view that
-stops answering its slider cannot drop out unnoticed. Every
-screenshot goes into ``tests/e2e/artifacts/gallery.html``, one page to scan. Notebooks run a
-few at a time in one browser; ``GALLERY_ONLY=01_,a2`` runs those whose path contains one of
-the comma-separated parts (a quick look at what you changed).
+it is checked again (every view is shot at its start at both sizes before anything moves).
+An interactive view is a 3D view (``.course-view``) or, in an output with a slider or a play
+button and no 3D view, its largest image: a matplotlib explorer (11's Runge and spline
+explorers), found without any class so that a new one cannot be missed. A gimbal explorer
+(01) is also set to Y = 90 degrees: the lock warning shows, and the view, the rings picture
+and the controls stay inside the output where they were. Some shots must exist
+(``REQUIRED``: 04's pole scene at both ends of its slider, the a2 walk at its first and last
+frame, 11's two explorers), so a view that stops answering its slider cannot drop out
+unnoticed. Every screenshot goes into ``tests/e2e/artifacts/gallery.html``, one page to
+scan. Notebooks run a few at a time in one browser; ``GALLERY_ONLY=01_,a2`` runs those whose
+path contains one of the comma-separated parts (a quick look at what you changed).
 """
 
 from __future__ import annotations
@@ -267,34 +266,6 @@ async def _type_into_slider(page, slider, value: str) -> None:
     await readout.evaluate("e => e.blur()")  # no focus ring in the next shot
 
 
-async def _readouts(view) -> list[str]:
-    """What every slider of the view's output reads."""
-    texts = await _output(view).locator(".widget-slider .widget-readout").all_inner_texts()
-    return [t.strip() for t in texts]
-
-
-async def _restore_start(page, view, start: list[str]) -> list[str]:
-    """Type the start back into the moved first slider's readout (Home would leave it at its
-    minimum), then into any other slider its move changed (an IK playground's iteration
-    slider jumps to the last sweep of the new solve, where a notebook had set another);
-    the problems when the sliders then do not read as at the start."""
-    sliders = _output(view).locator(".widget-slider")
-    for k in range(len(start)):
-        now = await _readouts(view)
-        if now[k] == start[k]:
-            continue
-        slider = sliders.nth(k)
-        if not await slider.locator(".widget-readout").is_visible():
-            return [f"the start cannot be restored: slider {k} shows no readout"]
-        # d3-format writes a minus sign (U+2212) that the readout does not parse back
-        await _type_into_slider(page, slider, start[k].replace("\u2212", "-"))
-        await _wait_settled(page, 1.0)
-    now = await _readouts(view)
-    if now != start:
-        return [f"not back at the start: the sliders read {now}, at the start {start}"]
-    return []
-
-
 # where the view, the rings picture and the warning are, from the DOM
 BOXES = """(view) => {
   const out = view.closest('.jp-OutputArea-output');
@@ -334,8 +305,35 @@ async def _gimbal_lock(page, view, shots: list[Shot], notebook: str, size, k: in
     for box in [*after["rings"], *([after["warning"]] if after["warning"] else [])]:
         if box[0] < out[0] - 1 or box[0] + box[2] > out[0] + out[2] + 1:
             problems.append(f"the rings or the warning {box} leave the output {out}")
-    await _type_into_slider(page, slider, start)  # back to the start for the next size
+    await _type_into_slider(page, slider, start)  # back where it was, for the next size
     await _wait_settled(page, 1.0)
+
+
+async def _shoot_views(page, kinds: list[str], shots: list[Shot], notebook: str) -> None:
+    """Every view at its start at every size first, before anything moves (a start typed
+    back into a slider is only as exact as its readout: a re-solve, other numbers); then the
+    moves: Y = 90 at every size, the slider's ends at the small one, where space is tight."""
+    for size in SIZES:
+        await page.set_viewport_size({"width": size[0], "height": size[1]})
+        await asyncio.sleep(1.0)
+        for k, kind in enumerate(kinds):
+            view = page.locator(f"[data-gallery-view='{k}']")
+            await _shoot(page, view, shots, notebook, size, k, "start", kind)
+    for size in reversed(SIZES):
+        await page.set_viewport_size({"width": size[0], "height": size[1]})
+        await asyncio.sleep(1.0)
+        for k, kind in enumerate(kinds):
+            view = page.locator(f"[data-gallery-view='{k}']")
+            await view.scroll_into_view_if_needed()  # where its start was shot
+            await _gimbal_lock(page, view, shots, notebook, size, k)
+            if size != SIZES[0]:
+                continue
+            for key, state in (("Home", "min"), ("End", "max")):
+                label = await _slider_end(page, view, key)
+                if label is None:
+                    break
+                await _wait_settled(page)
+                await _shoot(page, view, shots, notebook, size, k, f"{state} ({label})", kind)
 
 
 async def _gallery_of(browser, base: str, notebook: str) -> list[Shot]:
@@ -368,26 +366,7 @@ async def _gallery_of(browser, base: str, notebook: str) -> list[Shot]:
             shots.append(Shot(notebook, SIZES[0], -1, "run", "", [
                 f"a cell failed: {tracebacks[0][-300:]}"]))
         kinds = await page.evaluate(FIND_VIEWS)
-        not_restored: dict[int, list[str]] = {}
-        for size in SIZES:
-            await page.set_viewport_size({"width": size[0], "height": size[1]})
-            await asyncio.sleep(1.0)
-            for k, kind in enumerate(kinds):
-                view = page.locator(f"[data-gallery-view='{k}']")
-                await _shoot(page, view, shots, notebook, size, k, "start", kind)
-                shots[-1].problems[:0] = not_restored.get(k, [])
-                await _gimbal_lock(page, view, shots, notebook, size, k)
-                if size != SIZES[0]:
-                    continue  # the slider's ends once, at the small size (where it is tight)
-                start = await _readouts(view)
-                for key, state in (("Home", "min"), ("End", "max")):
-                    label = await _slider_end(page, view, key)
-                    if label is None:
-                        break
-                    await _wait_settled(page)
-                    await _shoot(page, view, shots, notebook, size, k, f"{state} ({label})", kind)
-                else:  # both ends shot: back to the start for the big size
-                    not_restored[k] = await _restore_start(page, view, start)
+        await _shoot_views(page, kinds, shots, notebook)
         missing = [s for s in REQUIRED.get(notebook, ())
                    if not any(shot.state.startswith(s) for shot in shots)]
         if missing:
@@ -453,9 +432,9 @@ def _write_gallery(results: dict[str, list[Shot]]) -> Path:
             ".ok{color:#1a7f37}.bad{color:#b42318;font-weight:bold}</style>"
             "<h1>The live views, as a student sees them</h1>"
             f"<p>{len(results)} notebooks, window sizes "
-            f"{', '.join(f'{w}x{h}' for w, h in SIZES)}; each view at its start, with its "
-            f"first slider at both ends ({SIZES[0][0]} only), and back at its start for "
-            f"{SIZES[1][0]}.</p>" + "".join(rows))
+            f"{', '.join(f'{w}x{h}' for w, h in SIZES)}; each view at its start (both sizes, "
+            f"before anything moves), and with its first slider at both ends ({SIZES[0][0]} "
+            "only).</p>" + "".join(rows))
     path = ARTIFACTS / "gallery.html"
     path.write_text(page)
     return path
