@@ -107,6 +107,21 @@ def webgl_drawn(frame: Any, timeout_ms: float = 60_000) -> Any:
     return frame.wait_for_function(WEBGL_DRAWN, timeout=timeout_ms)
 
 
+def wait_until_answers(url: str, server: subprocess.Popen, log: Path,
+                       timeout_s: float = 90) -> None:
+    """Wait until ``url`` answers; a server that exits or stays silent raises with the end
+    of its ``log``."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            urllib.request.urlopen(url, timeout=2)
+            return
+        except OSError:
+            if server.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError(log.read_text()[-3000:]) from None
+            time.sleep(0.3)
+
+
 @contextmanager
 def lab_server(root: Path, env: Mapping[str, str] | None = None) -> Iterator[str]:
     """JupyterLab serving ``root`` on a free localhost port; yields its base URL."""
@@ -134,15 +149,7 @@ def lab_server(root: Path, env: Mapping[str, str] | None = None) -> Iterator[str
     server = subprocess.Popen(cmd, env=full_env, stdout=log, stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
     try:
-        deadline = time.monotonic() + 90
-        while True:
-            try:
-                urllib.request.urlopen(f"{base}/api/status?token={TOKEN}", timeout=2)
-                break
-            except OSError:
-                if server.poll() is not None or time.monotonic() > deadline:
-                    raise RuntimeError((root / "lab.log").read_text()[-3000:]) from None
-                time.sleep(0.3)
+        wait_until_answers(f"{base}/api/status?token={TOKEN}", server, root / "lab.log")
         yield base
     finally:
         server.terminate()
@@ -164,22 +171,35 @@ def launch_browser(playwright: Any) -> Any:
     )
 
 
+def new_page(browser: Any, width: int = 1400, height: int = 1000) -> Any:
+    """A page in a new browser context whose frames record key presses and pictures
+    (:data:`FRAME_PROBE`). The caller closes ``page.context``."""
+    context = browser.new_context(viewport={"width": width, "height": height})
+    context.add_init_script(FRAME_PROBE)
+    return context.new_page()
+
+
+def run_all(page: Any, url: str, *, run_timeout_ms: int = 240_000) -> None:
+    """Open the notebook at ``url`` in ``page``, run all its cells and wait until every one
+    has run and the kernel is idle again."""
+    page.goto(url)
+    page.wait_for_function("window.jupyterapp && document.querySelector('.jp-Notebook')",
+                           timeout=90_000)
+    page.wait_for_function(KERNEL_IDLE, timeout=90_000)
+    page.evaluate(RUN_ALL)
+    page.wait_for_function(ALL_RUN, timeout=run_timeout_ms, polling=250)
+
+
 def open_notebook(browser: Any, base: str, path: str, *, width: int = 1400,
                   height: int = 1000, run_timeout_ms: int = 240_000) -> Any:
     """A new page on the notebook ``path`` (relative to the Lab's root), all cells run and
     the kernel idle again. The caller closes ``page.context``."""
-    context = browser.new_context(viewport={"width": width, "height": height})
-    context.add_init_script(FRAME_PROBE)
-    page = context.new_page()
+    page = new_page(browser, width, height)
     try:
-        page.goto(f"{base}/lab/tree/{path}?reset&token={TOKEN}")
-        page.wait_for_function("window.jupyterapp && document.querySelector('.jp-Notebook')",
-                               timeout=90_000)
-        page.wait_for_function(KERNEL_IDLE, timeout=90_000)
-        page.evaluate(RUN_ALL)
-        page.wait_for_function(ALL_RUN, timeout=run_timeout_ms, polling=250)
+        run_all(page, f"{base}/lab/tree/{path}?reset&token={TOKEN}",
+                run_timeout_ms=run_timeout_ms)
     except Exception:
-        context.close()
+        page.context.close()
         raise
     return page
 

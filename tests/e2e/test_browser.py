@@ -15,14 +15,14 @@ from pathlib import Path
 
 import pytest
 from labkit import (
-    FRAME_PROBE,
-    KERNEL_IDLE,
     REPO,
-    RUN_ALL,
     TOKEN,
     chromium,
+    kernel_alive,
     lab_server,
     launch_browser,
+    new_page,
+    run_all,
     webgl_drawn,
 )
 
@@ -63,25 +63,15 @@ def _notebook_page(base: str, notebook: Path, artifact: str):
     ARTIFACTS.mkdir(exist_ok=True)
     with sync_playwright() as p:
         browser = launch_browser(p)
-        context = browser.new_context(viewport={"width": 1400, "height": 1000})
-        context.add_init_script(FRAME_PROBE)  # counts the WebGL draws in the view's iframe
-        page = context.new_page()
+        page = new_page(browser)  # (its probe counts the WebGL draws in the view's iframe)
         try:
-            page.goto(f"{base}/lab/tree/{notebook.name}?reset&token={TOKEN}")
-            page.wait_for_function("window.jupyterapp && document.querySelector('.jp-Notebook')",
-                                   timeout=60_000)
-            page.wait_for_function(KERNEL_IDLE, timeout=60_000)
-            page.evaluate(RUN_ALL)
+            run_all(page, f"{base}/lab/tree/{notebook.name}?reset&token={TOKEN}")
             yield page
         except Exception:
             page.screenshot(path=str(ARTIFACTS / f"{artifact}_failure.png"), full_page=True)
             raise
         finally:
             browser.close()
-
-
-def _kernel_alive(page) -> bool:
-    return page.evaluate(KERNEL_IDLE.replace(" === 'idle'", " !== 'dead'"))
 
 
 def _webgl_draws(view) -> int:
@@ -129,7 +119,7 @@ def test_slider_moves_the_skeleton_in_jupyterlab(lab):
         image_after = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_after.png"))
         widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_after.png"))
         draws_after = _webgl_draws(view) if backend == "client" else 0
-        alive = _kernel_alive(page)
+        alive = kernel_alive(page)
     assert alive, "the kernel died while the slider moved"
     assert text_after != text_before
     assert image_after != image_before, "the 3D view did not change"
@@ -165,7 +155,7 @@ def test_dragging_the_target_sphere_solves_ik_again(lab):
         page.wait_for_timeout(3000)
         after = [readouts.nth(k).inner_text() for k in range(2)]
         view.screenshot(path=str(ARTIFACTS / "e2e_drag_after.png"))
-        alive = _kernel_alive(page)
+        alive = kernel_alive(page)
     assert alive, "the kernel died while the target was dragged"
     assert after != before, "dragging the sphere did not move the target sliders"
 
@@ -214,7 +204,7 @@ def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
         after = [readouts.nth(k).inner_text() for k in range(3)]
         image_after = view.screenshot(path=str(ARTIFACTS / "e2e_pad_after.png"))
         draws_after = _webgl_draws(view)
-        alive = _kernel_alive(page)
+        alive = kernel_alive(page)
     assert alive, "the kernel died while the target was dragged"
     assert after != before, "dragging the pad did not move the target sliders"
     assert image_after != image_before, "the 3D view did not change"

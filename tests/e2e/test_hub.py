@@ -25,7 +25,6 @@ import signal
 import subprocess
 import sys
 import time
-import urllib.request
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -34,15 +33,15 @@ from typing import Any
 import numpy as np
 import pytest
 from labkit import (
-    ALL_RUN,
-    FRAME_PROBE,
-    KERNEL_IDLE,
-    RUN_ALL,
     chromium,
     frames_after,
     free_port,
     kernel_alive,
     launch_browser,
+    new_page,
+    run_all,
+    wait_until_answers,
+    webgl_drawn,
 )
 
 from course.viz._backend import HUB_PROXY_PROBE
@@ -100,15 +99,7 @@ def hub_server(root: Path) -> Iterator[str]:
                            start_new_session=True)
     base = f"http://127.0.0.1:{port}"
     try:
-        deadline = time.monotonic() + 90
-        while True:
-            try:
-                urllib.request.urlopen(f"{base}/hub/api", timeout=2)
-                break
-            except OSError:
-                if hub.poll() is not None or time.monotonic() > deadline:
-                    raise RuntimeError((root / "hub.log").read_text()[-3000:]) from None
-                time.sleep(0.3)
+        wait_until_answers(f"{base}/hub/api", hub, root / "hub.log")
         yield base
     finally:
         hub.terminate()  # the hub stops the users' servers and its proxy
@@ -148,9 +139,7 @@ def _student_notebook(base: str, user: str) -> Iterator[Any]:
 
     with sync_playwright() as p:
         browser = launch_browser(p)
-        context = browser.new_context(viewport={"width": 1400, "height": 1000})
-        context.add_init_script(FRAME_PROBE)
-        page = context.new_page()
+        page = new_page(browser)
         try:
             page.goto(f"{base}/hub/login")
             page.fill("input[name=username]", user)
@@ -158,12 +147,7 @@ def _student_notebook(base: str, user: str) -> Iterator[Any]:
             page.click("[type=submit]")
             # the spawn-pending page forwards to the user's Lab once the server is up
             page.wait_for_url(f"**/user/{user}/lab**", timeout=120_000)
-            page.goto(f"{base}/user/{user}/lab/tree/{NOTEBOOK.name}?reset")
-            page.wait_for_function("window.jupyterapp && document.querySelector('.jp-Notebook')",
-                                   timeout=90_000)
-            page.wait_for_function(KERNEL_IDLE, timeout=90_000)
-            page.evaluate(RUN_ALL)
-            page.wait_for_function(ALL_RUN, timeout=240_000, polling=250)
+            run_all(page, f"{base}/user/{user}/lab/tree/{NOTEBOOK.name}?reset")
             yield page
         except Exception:
             page.screenshot(path=str(ARTIFACTS / f"hub_{user}_failure.png"), full_page=True)
@@ -259,9 +243,7 @@ def test_a_hub_with_the_proxy_draws_the_view_in_the_browser(hub):
         # vtk.js drew (WebGL calls in the iframe), not trame's "Loading..." that waits for its
         # websocket through the proxies
         try:
-            frame.element_handle().content_frame().wait_for_function(
-                "() => document.querySelector('canvas') && window.__frames.length > 0",
-                timeout=60_000)
+            webgl_drawn(frame.element_handle().content_frame())
         except Exception:
             _save(_image(view.screenshot()), f"hub_{PROXY_USER}_never_drawn.png")
             raise AssertionError("vtk.js never drew in the view's iframe") from None
