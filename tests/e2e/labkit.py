@@ -122,6 +122,38 @@ def wait_until_answers(url: str, server: subprocess.Popen, log: Path,
             time.sleep(0.3)
 
 
+def drawn_pixels(picture: Any) -> int:
+    """Pixels drawn in colour (bones, joints, axes) in a view's picture (PNG bytes or an
+    ``(H, W, 3)`` array): the background and the floor are pale grey."""
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    if isinstance(picture, bytes):
+        picture = Image.open(io.BytesIO(picture)).convert("RGB")
+    image = np.asarray(picture).astype(np.int16)
+    return int((np.ptp(image, axis=-1) > 70).sum())
+
+
+def drawn_picture(view: Any, path: Path | None = None, timeout_s: float = 30.0) -> bytes:
+    """A screenshot (PNG) of ``view`` that shows a drawing, saved to ``path``. A live view's
+    canvas can reach a screenshot a moment after it drew (a blank white iframe first), so
+    the screenshot is taken again until at least 200 pixels are drawn in colour; a view that
+    stays blank raises, saying so."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        png = view.screenshot()
+        if drawn_pixels(png) >= 200:
+            break
+        if time.monotonic() > deadline:
+            raise AssertionError(f"the view stayed blank for {timeout_s:.0f} s")
+        time.sleep(0.5)
+    if path is not None:
+        path.write_bytes(png)
+    return png
+
+
 @contextmanager
 def lab_server(root: Path, env: Mapping[str, str] | None = None) -> Iterator[str]:
     """JupyterLab serving ``root`` on a free localhost port; yields its base URL."""

@@ -18,6 +18,7 @@ from labkit import (
     REPO,
     TOKEN,
     chromium,
+    drawn_picture,
     kernel_alive,
     lab_server,
     launch_browser,
@@ -98,7 +99,7 @@ def test_slider_moves_the_skeleton_in_jupyterlab(lab):
         page.wait_for_timeout(500 if backend == "static" else 6000)
         draws_before = _webgl_draws(view) if backend == "client" else 0
         text_before = readout.inner_text()
-        image_before = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_before.png"))
+        image_before = drawn_picture(view, ARTIFACTS / f"e2e_{backend}_view_before.png")
         widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_before.png"))
 
         handle = page.locator(".widget-slider .noUi-handle").first
@@ -116,7 +117,7 @@ def test_slider_moves_the_skeleton_in_jupyterlab(lab):
         page.wait_for_timeout(800 if backend == "static" else 4000)  # the last frame
         widget_area.scroll_into_view_if_needed()
         text_after = readout.inner_text()
-        image_after = view.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_view_after.png"))
+        image_after = drawn_picture(view, ARTIFACTS / f"e2e_{backend}_view_after.png")
         widget_area.screenshot(path=str(ARTIFACTS / f"e2e_{backend}_widget_after.png"))
         draws_after = _webgl_draws(view) if backend == "client" else 0
         alive = kernel_alive(page)
@@ -176,7 +177,7 @@ def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
         draws_before = _webgl_draws(view)
         readouts = page.locator(".widget-slider .widget-readout")
         before = [readouts.nth(k).inner_text() for k in range(3)]
-        image_before = view.screenshot(path=str(ARTIFACTS / "e2e_pad_before.png"))
+        image_before = drawn_picture(view, ARTIFACTS / "e2e_pad_before.png")
         # (the screenshot scrolled to the view; hovering brings the mouse back to the page.
         # Synthetic mouse events right after a screenshot of the view's iframe are sometimes
         # lost, so the drag is tried up to three times; one of them must move the target)
@@ -202,7 +203,7 @@ def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
         assert moved, "three drags on the pad did not move the target sliders"
         page.wait_for_timeout(3000)
         after = [readouts.nth(k).inner_text() for k in range(3)]
-        image_after = view.screenshot(path=str(ARTIFACTS / "e2e_pad_after.png"))
+        image_after = drawn_picture(view, ARTIFACTS / "e2e_pad_after.png")
         draws_after = _webgl_draws(view)
         alive = kernel_alive(page)
     assert alive, "the kernel died while the target was dragged"

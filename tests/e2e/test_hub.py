@@ -34,6 +34,8 @@ import numpy as np
 import pytest
 from labkit import (
     chromium,
+    drawn_picture,
+    drawn_pixels,
     frames_after,
     free_port,
     kernel_alive,
@@ -162,19 +164,6 @@ def _image(png: bytes) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(np.int16)
 
 
-def _drawn_pixels(image: np.ndarray) -> int:
-    """Pixels drawn in colour (bones, joints, axes): the background and floor are pale grey."""
-    return int((np.ptp(image, axis=-1) > 70).sum())
-
-
-def _first_picture(view: Any, timeout_s: float = 60.0) -> np.ndarray:
-    """The view's first picture that is not blank (a live view draws a moment after its cell)."""
-    deadline = time.monotonic() + timeout_s
-    while True:
-        image = _image(view.screenshot())
-        if (image.std() >= 4 and _drawn_pixels(image) >= 200) or time.monotonic() > deadline:
-            return image
-        time.sleep(0.5)
 
 
 def _press_and_see(page: Any, view: Any, key: str = "End",
@@ -208,9 +197,8 @@ def _save(image: np.ndarray, name: str) -> None:
 def _check_view(page: Any, view: Any, user: str) -> None:
     """The picture is drawn; a slider key press changes it and the readout; the kernel lives."""
     view.scroll_into_view_if_needed()
-    before = _first_picture(view)
-    _save(before, f"hub_{user}_before.png")
-    assert before.std() >= 4 and _drawn_pixels(before) >= 200, "the view is blank"
+    # a live view draws a moment after its cell: its first picture that is not blank
+    before = _image(drawn_picture(view, ARTIFACTS / f"hub_{user}_before.png", timeout_s=60))
     readout = page.locator(".widget-html-content").filter(has_text="Qj =").last
     text_before = readout.inner_text()
     after, latency = _press_and_see(page, view)
@@ -221,7 +209,7 @@ def _check_view(page: Any, view: Any, user: str) -> None:
     assert latency is not None, "no new frame reached the page after the key press"
     assert readout.inner_text() != text_before, "the readout did not follow the slider"
     assert np.abs(after - before).mean() > 0.5, "the 3D view did not change"
-    assert _drawn_pixels(after) >= 200, "the view is blank after the key press"
+    assert drawn_pixels(after) >= 200, "the view is blank after the key press"
 
 
 def _probes(root: Path, user: str, status: int) -> int:
