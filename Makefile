@@ -8,7 +8,7 @@ STAMP   := $(VENV)/.installed
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 TEST_ENV := PYVISTA_JUPYTER_BACKEND=static PYVISTA_OFF_SCREEN=true
 
-.PHONY: lab test test-oldest e2e setup sysdeps lint clean
+.PHONY: lab test test-numeric test-oldest e2e setup sysdeps lint clean
 
 # As root (a container, a cloud VM) Jupyter refuses to start without --allow-root.
 LAB_FLAGS := $(if $(filter 0,$(shell id -u 2>/dev/null)),--allow-root,)
@@ -59,6 +59,15 @@ test-oldest:
 	  $(OLDEST_TESTS) || status=$$?; \
 	echo "test-oldest: $$(( $$(date +%s) - start )) s, install included"; \
 	exit $$status
+
+# The notebooks' checked outputs and the library tests that compare floats, again, on this
+# machine's alternate numeric path (tests/numeric_paths.py: an older OpenBLAS kernel, numpy's
+# baseline SIMD, another BLAS thread count; printed first): what they print and assert must
+# not depend on which kernel rounded last, since another CPU rounds differently. About a
+# minute on 2 cores.
+test-numeric: setup
+	$(TEST_ENV) $(PY) tests/numeric_paths.py -- $(PY) -m pytest -n $(JOBS) --dist loadscope \
+	  --nbval-lax --nbval-current-env notebooks $(OLDEST_TESTS) tests/test_numeric_paths.py
 
 # The browser test: JupyterLab in headless Chromium (Debian's package; never a downloaded build).
 e2e: setup
