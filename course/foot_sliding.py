@@ -137,7 +137,8 @@ class FootSliding:
         return mean
 
     def __str__(self) -> str:
-        speed = np.fmax.reduce(self.speed_cm_per_s, axis=0)  # NaN only for a foot never down
+        # NaN only for a foot never down (or a one-frame clip: no steps at all)
+        speed = np.fmax.reduce(self.speed_cm_per_s, axis=0, initial=np.nan)
         return "\n".join(
             f"{foot:<14} {n:4d} contact frames: slides {total:6.2f} cm, {mean:6.2f} cm/s mean, "
             f"{top:6.2f} cm/s max"

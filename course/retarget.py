@@ -50,6 +50,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._typing import Array
+from ._validate import as_array
+from .fk import _check_unit, check_parents
 from .motion import Motion, default_channels
 from .rotations import (
     quat_between,
@@ -312,16 +314,34 @@ def retarget_rest(
     -------
     ndarray, shape (..., J, 4)
         Rotations under which every bone of the target points where the source's does.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: parents that are no tree, offsets or rotations that are not
+        numbers of the right shape, or a rotation that is not a unit quaternion (with its
+        joint), as forward kinematics refuses it: non-unit rotations compound down a chain
+        (norm 3 at every joint gave norm 243 five joints down).
     """
-    names = [f"joint{j}" for j in range(len(np.asarray(parents)))]
-    source = Skeleton(names, parents, offsets_from)
-    target = Skeleton(names, parents, offsets_to)
-    R = np.asarray(local_quats, dtype=np.float64)
-    if R.ndim < 2 or R.shape[-2:] != (len(names), 4):
-        raise ValueError(f"local_quats: expected shape (..., {len(names)}, 4), got {R.shape}")
+    p = check_parents(parents)
+    names = [f"joint{j}" for j in range(len(p))]
+    source = Skeleton(names, p, _bones(offsets_from, "offsets_from", len(p)))
+    target = Skeleton(names, p, _bones(offsets_to, "offsets_to", len(p)))
+    R = as_array(local_quats, "local_quats", (4,))
+    if R.ndim < 2 or R.shape[-2] != len(p):
+        raise ValueError(f"local_quats: expected shape (..., {len(p)}, 4), got {R.shape}")
+    _check_unit(R, "local_quats")
     m = np.arange(len(names))
     C = _corrections(source, target, m)
     return _retarget_rotations(target.parents, m, C, _globals(source.parents, R))
+
+
+def _bones(offsets: ArrayLike, name: str, n: int) -> Array:
+    """``offsets`` checked to be ``n`` bones (n, 3), the error naming ``name``."""
+    L = as_array(offsets, name, (3,))
+    if L.shape != (n, 3):
+        raise ValueError(f"{name}: expected shape ({n}, 3), one bone per joint, got {L.shape}")
+    return L
 
 
 def retarget(
@@ -456,7 +476,14 @@ def bone_direction_errors(
     source: Motion, target: Motion, name_map: Mapping[str, str] | None = None
 ) -> Array:
     """Angle in degrees, per frame and compared bone, between the two clips' global bone
-    directions, shape (F, B) for the bones of :func:`compare_rest_poses` (same order)."""
+    directions, shape (F, B) for the bones of :func:`compare_rest_poses` (same order).
+
+    Raises
+    ------
+    ValueError
+        If the clips' frame counts differ, the map is bad (as in :func:`retarget`), or no
+        bone can be compared (no mapped joint below another with a non-zero bone in both).
+    """
     if source.n_frames != target.n_frames:
         raise ValueError(f"target: has {target.n_frames} frames, source has {source.n_frames}")
     m = _mapping(source.skeleton, target.skeleton, name_map)
@@ -470,6 +497,11 @@ def bone_direction_errors(
     pairs = [(i, a) for i, a in pairs
              if min(np.linalg.norm(rest_t[i] - rest_t[a]),
                     np.linalg.norm(rest_s[m[i]] - rest_s[m[a]])) > _ZERO_BONE]
+    if not pairs:
+        mapped = [target.skeleton.names[j] for j in np.flatnonzero(m >= 0)]
+        raise ValueError(f"name_map: no bone to compare: no mapped target joint lies below "
+                         f"another with a bone of non-zero length in both skeletons (mapped: "
+                         f"{mapped})")
     i, a = (np.array(x, dtype=int) for x in zip(*pairs, strict=True))
     d_t = P_t[:, i] - P_t[:, a]
     d_s = P_s[:, m[i]] - P_s[:, m[a]]

@@ -11,6 +11,7 @@ import linecache
 import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -98,6 +99,84 @@ def test_unknown_keys_list_the_known_ones():
         check("02.no_such", reference("02.fk_step"))
     with pytest.raises(KeyError, match="no exercises"):
         exercises("99")
+
+
+def test_a_key_that_is_not_a_name_or_names_nothing_is_a_clear_error():
+    with pytest.raises(TypeError, match="a string such as '02.fk_step', got NoneType"):
+        check(None, reference("02.fk_step"))
+    with pytest.raises(KeyError) as unknown:
+        check("fk_step", reference("02.fk_step"))
+    assert str(unknown.value).startswith("no exercise 'fk_step'; the exercises are 01.compose")
+    assert all(key in str(unknown.value) for key in ALL)
+
+
+def test_an_exception_that_cannot_say_what_it_is_is_reported_by_its_type():
+    class Broken(Exception):
+        def __str__(self):
+            raise RuntimeError("no message")
+
+    def raises(p, Q, l_i):
+        raise Broken
+
+    feedback = check("02.fk_step", raises)
+    assert feedback.status == "fail" and "raises raised Broken (line" in feedback.text
+
+
+@pytest.mark.parametrize("kind", ["python loop", "long C call"])
+def test_a_call_over_the_time_limit_is_stopped_and_the_rest_skipped(kind):
+    """The grader's 2 s per case: a Python loop is stopped at 2 s, a sleep when it returns;
+    either way the check says so, and the cases after it are not run (each 2.5 s call would
+    have made this check take 12 s, silently)."""
+    def busy(p, Q, l_i):
+        end = time.monotonic() + 2.5
+        while time.monotonic() < end:
+            pass
+        return reference("02.fk_step")(p, Q, l_i)
+
+    def sleeps(p, Q, l_i):
+        time.sleep(2.5)
+        return reference("02.fk_step")(p, Q, l_i)
+
+    start = time.monotonic()
+    feedback = check("02.fk_step", busy if kind == "python loop" else sleeps)
+    elapsed = time.monotonic() - start
+    assert feedback.status == "fail", feedback.text
+    assert "took longer than 2 s on this case and was stopped" in feedback.text
+    assert elapsed < (2.4 if kind == "python loop" else 4.0), elapsed
+    assert check("02.fk_step", reference("02.fk_step")).passed  # nothing left behind
+
+
+def test_a_time_limit_never_fires_after_its_block():
+    """However close to the limit the block ends, the exception is raised inside the
+    ``with`` or not at all (the watchdog's post is cleared on the way out)."""
+    from course.exercises.check import _OutOfTime, _TimeLimit
+
+    fired = 0
+    for i in range(300):
+        limit = 1e-4 * (i % 10)
+        timer = _TimeLimit(limit)
+        try:
+            with timer:
+                end = time.perf_counter() + limit
+                while time.perf_counter() < end:
+                    pass
+        except _OutOfTime:
+            assert timer.fired
+        fired += timer.fired
+        sum(range(2000))  # bytecodes where a late exception would surface
+    assert 0 < fired < 300
+
+
+def test_what_a_function_prints_is_shown_cut_short(capsys):
+    def chatty(p, Q, l_i):
+        print("x" * 200_000)
+        return reference("02.fk_step")(p, Q, l_i)
+
+    assert check("02.fk_step", chatty).passed
+    out = capsys.readouterr().out
+    assert out.startswith("x" * 4000) and len(out) < 4200
+    assert out.rstrip().endswith("… and 996,005 more characters printed by your function, "
+                                 "not shown")
 
 
 def test_hint_and_quiz_headless(capsys):

@@ -98,6 +98,15 @@ def test_never_in_contact_has_no_mean_and_prints_a_row_per_foot():
     assert str(on).startswith("Foot") and "80.00 cm," in str(on) and "100.00 cm/s max" in str(on)
 
 
+def test_a_one_frame_clip_has_no_steps_and_prints():
+    """One frame: no step to slide, so no mean or largest speed (printing it raised numpy's
+    "zero-size array to reduction operation fmax")."""
+    s = foot_sliding(planted_then_dragged(1, 1, 0.0, 0.1), ["Foot"])
+    assert s.steps_cm.shape == (0, 1) and s.total_cm.tolist() == [0.0]
+    assert str(s) == ("Foot              1 contact frames: slides   0.00 cm,    nan cm/s mean,"
+                      "    nan cm/s max")
+
+
 def test_planted_feet_of_the_bundled_clip_do_not_slide():
     wave = data.load("wave")
     s = foot_sliding(wave, ("LeftFoot", "RightFoot"))

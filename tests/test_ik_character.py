@@ -55,6 +55,14 @@ def test_component_clamp_is_the_checked_clamp(seed):
         np.testing.assert_allclose(np.abs(np.einsum("bi,bi->b", got, want)), 1.0, atol=1e-12)
 
 
+@pytest.mark.parametrize("ops", [FLOATS, ARRAYS], ids=["floats", "arrays"])
+def test_component_clamp_takes_the_twist_to_the_nearer_bound_round_the_circle(ops):
+    """-3.0 with the range [-0.5, 3.0] goes to 3.0 (0.28 away through -pi), not -0.5."""
+    q = quat_from_axis_angle([0.0, 0.0, 1.0], -3.0)
+    got = clamp_components(tuple(q.tolist()), (0.0, 0.0, 1.0), 1.0, -0.5, 3.0, ops)
+    assert float(twist_angle(np.array(got, float), [0.0, 0.0, 1.0])) == pytest.approx(3.0)
+
+
 # --------------------------------------------------------------------------- random trees
 @st.composite
 def limited_trees(draw):

@@ -3,6 +3,8 @@ stability of the three integrators, Newton's optimality, the PD fix, the cloth, 
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -12,6 +14,7 @@ from course.physics import (
     BEND,
     SHEAR,
     STRUCTURAL,
+    NotConvergedWarning,
     SpringSystem,
     explicit_euler_step,
     grid_cloth,
@@ -310,6 +313,80 @@ def test_flat_functions_match_step():
         x_new, v_new = fn(x, v, *args)
         ref = step(system, x, v, 0.02, method)
         assert np.allclose(x_new, ref.x) and np.allclose(v_new, ref.v), method
+
+
+def stiff_cloth():
+    """A stiff 3x3 cloth, jittered, stepped by a whole second: Newton needs ~60 iterations."""
+    cloth = grid_cloth(3, 3, stiffness=1e5)
+    x = cloth.positions + np.random.default_rng(0).normal(scale=0.2, size=cloth.positions.shape)
+    return cloth.system, x
+
+
+def test_an_unconverged_implicit_step_says_so_with_its_numbers():
+    s, x = stiff_cloth()
+    args = (x, 0 * x, s.masses, s.springs, s.rest, s.k, 1.0, s.fixed, s.gravity)
+    stats = step(s, x, 0 * x, 1.0).stats
+    assert not stats.converged and stats.iterations == 50
+    with pytest.warns(NotConvergedWarning) as caught:
+        x_new, _ = implicit_euler_step(*args)
+    message = str(caught[0].message)
+    grad = np.linalg.norm(implicit_euler_gradient(x_new, *args))  # measured afresh
+    assert f"after 50 iterations with ‖∇E‖ = {grad:.3g} N" in message
+    assert f"threshold {stats.threshold:.3g} N" in message and grad > stats.threshold
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", NotConvergedWarning)
+        x_new, _ = implicit_euler_step(*args, max_iter=1000)
+    assert np.linalg.norm(implicit_euler_gradient(x_new, *args)) <= stats.threshold
+
+
+def test_simulate_says_which_steps_did_not_converge():
+    s, x = stiff_cloth()
+    with pytest.warns(NotConvergedWarning, match=r"simulate: .* stopped in step 1 after 50 "
+                                                  r"iterations.* of 3 steps did not converge"):
+        run = simulate(s, x, 0 * x, 1.0, 3)
+    assert run.unconverged == [n for n, st in enumerate(run.stats, 1) if not st.converged]
+    assert run.unconverged[0] == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", NotConvergedWarning)
+        calm = simulate(s, x, 0 * x, 1.0, 3, max_iter=1000)
+    assert calm.unconverged == [] and all(st.converged for st in calm.stats)
+
+
+def test_a_system_come_to_rest_converges_at_rounding_level():
+    """No gravity and nearly at rest: the force scale tends to 0, and tol times it fell below
+    the rounding error of ∇E itself. 12 of these 400 steps then chased noise (‖∇E‖ ~1e-14)
+    for all 50 iterations and said they had not converged; the threshold's floor, rounding's
+    size, stops them at once, and no warning is given."""
+    system, x, v = single_spring(k=100.0, m=1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", NotConvergedWarning)
+        run = simulate(system, x, v, 0.3, 400, "implicit")
+    assert run.unconverged == [] and max(st.iterations for st in run.stats) <= 2
+    late = run.stats[-1]
+    assert late.gradient_norm <= late.threshold < 1e-10  # still only rounding's size
+
+
+@settings(derandomize=True, max_examples=25, deadline=None)
+@given(st.integers(0, 10_000), st.integers(1, 4))
+def test_property_the_warning_is_given_exactly_when_the_gradient_is_too_large(seed, max_iter):
+    """The flag tells the truth: a warning iff ‖∇E(x⁺)‖, computed afresh, is above tol times
+    the force scale (the free particles' weight, or the gradient at the start if larger)."""
+    system, x, v = random_system(seed, fixed=[0], gravity=(0.0, -9.81, 0.0))
+    args = (x, v, system.masses, system.springs, system.rest, system.k, 0.1, system.fixed,
+            system.gravity)
+    free = np.ones(len(x), bool)
+    free[0] = False
+    start = x + 0.1 * v + 0.01 * np.array(system.gravity)
+    start[0] = x[0]
+    scale = max(np.linalg.norm(system.masses[free]) * 9.81,
+                np.linalg.norm(implicit_euler_gradient(start, *args)))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", NotConvergedWarning)
+        x_new, _ = implicit_euler_step(*args, max_iter=max_iter)
+    too_large = np.linalg.norm(implicit_euler_gradient(x_new, *args)) > 1e-6 * scale
+    assert too_large == any(issubclass(w.category, NotConvergedWarning) for w in caught)
+    if too_large:
+        assert f"after {max_iter} iterations" in str(caught[0].message)
 
 
 def test_grid_cloth_springs():

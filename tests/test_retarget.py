@@ -230,6 +230,47 @@ def test_other_errors_name_the_argument(walk):
         with_rest_pose(walk.skeleton, np.ones((3, 4)))
 
 
+STICK = ([-1, 0, 1, 2], [[0, 0, 0], [0, 1, 0], [0, 1, 0], [0, 1, 0]],
+         [[0, 0, 0], [1, 0, 0], [1, 0, 0], [1, 0, 0]])  # parents, a rest pose up, one along x
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({3: [3.0, 0, 0, 0]}, r"local_quats: the quaternion of joint 3 at index \(3,\) has norm 3, "
+                          "not 1"),
+    ({1: [0.0, 0, 0, 0]}, r"local_quats: the quaternion of joint 1 .* has norm 0"),
+    ({2: [np.nan, 0, 0, 0]}, "local_quats: contains NaN or infinity"),
+])
+def test_retarget_rest_refuses_rotations_that_are_not_unit_naming_the_joint(change, message):
+    """As forward kinematics does: a norm-3 rotation was taken, and scaled the bones below it
+    (3, 27, 243 ... down a chain); a zero or NaN one failed naming an internal ``a``."""
+    R = np.tile([1.0, 0, 0, 0], (4, 1))
+    for j, q in change.items():
+        R[j] = q
+    with pytest.raises(ValueError, match=message):
+        retarget_rest(*STICK, R)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (("abc", *STICK[1:], np.tile([1.0, 0, 0, 0], (4, 1))), "parents: expected a non-empty"),
+    ((*STICK[:2], "abc", np.tile([1.0, 0, 0, 0], (4, 1))), "offsets_to: expected numbers, got "
+                                                           "strings"),
+    ((STICK[0], np.zeros((3, 3)), *STICK[2:], np.tile([1.0, 0, 0, 0], (4, 1))),
+     r"offsets_from: expected shape \(4, 3\), one bone per joint, got \(3, 3\)"),
+    ((*STICK, "1, 0, 0, 0"), "local_quats: expected numbers, got strings"),
+    ((*STICK, [["1", "0", "0", "0"]] * 4), "local_quats: expected numbers, got strings"),
+])
+def test_retarget_rest_names_the_bad_argument(args, message):
+    with pytest.raises(ValueError, match=message):
+        retarget_rest(*args)
+
+
+def test_bone_direction_errors_without_a_comparable_bone_says_so(walk):
+    """Only the root mapped: no bone between two mapped joints (was numpy's "not enough values
+    to unpack")."""
+    with pytest.raises(ValueError, match=r"name_map: no bone to compare: .*\(mapped: \['Hips'\]"):
+        bone_direction_errors(walk[:2], walk[:2], {"Hips": "Hips"})
+
+
 # --------------------------------------------------------------------------- random trees
 def random_tree(rng: np.random.Generator) -> Skeleton:
     n = int(rng.integers(2, 10))
@@ -259,3 +300,17 @@ def test_random_trees_and_rest_poses(seed):
     assert_quat_equal(back.local_rotations, clip.local_rotations, atol=1e-9)
     assert_quat_equal(retarget_rest(source.parents, source.offsets, target.offsets,
                                     clip.local_rotations), out.local_rotations, atol=1e-12)
+
+
+@PROPERTY
+@given(st.integers(0, 2**32 - 1), st.floats(0.01, 10.0).filter(lambda s: abs(s - 1) > 1e-4))
+def test_property_retarget_rest_names_the_first_rotation_that_is_not_unit(seed, scale):
+    rng = np.random.default_rng(seed)
+    source = random_tree(rng)
+    n = source.n_joints
+    R = random_quats(rng, (3, n))
+    f, j = int(rng.integers(3)), int(rng.integers(n))
+    R[f, j] *= scale
+    with pytest.raises(ValueError, match=rf"local_quats: the quaternion of joint {j} at index "
+                                         rf"\({f}, {j}\) has norm {scale:.6g}, not 1"):
+        retarget_rest(source.parents, source.offsets, source.offsets, R)

@@ -32,6 +32,20 @@ def _unit(v):
     return np.asarray(v, float) / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
+def _apart(a, b):
+    """How far apart angles ``a`` and ``b`` are round the circle, in [0, pi]."""
+    d = abs(a - b) % (2 * np.pi)
+    return min(d, 2 * np.pi - d)
+
+
+def _off_range(theta, lo, hi):
+    """How far round the circle ``theta`` is from the arc [lo, hi]: 0 on it (as theta, or as
+    theta +- 2 pi), else the distance to the nearer bound."""
+    if any(lo <= theta + k * 2 * np.pi <= hi for k in (-1, 0, 1)):
+        return 0.0
+    return min(_apart(theta, lo), _apart(theta, hi))
+
+
 @PROPERTY
 @given(quats, axes)
 def test_recomposes_twist_about_axis_swing_perpendicular(q, axis):
@@ -115,10 +129,9 @@ def test_clamp_is_within_limits_idempotent_and_keeps_allowed(q, axis, lim):
     c = clamp_swing_twist(q, axis, cone, (lo, hi))
     assert abs(np.linalg.norm(c) - 1) < 1e-12
     assert swing_angle(c, axis) <= cone + 1e-9
-    theta = twist_angle(c, axis)
-    assert lo - 1e-9 <= theta <= hi + 1e-9 or swing_angle(c, axis) > np.pi - 1e-6
+    assert _off_range(twist_angle(c, axis), lo, hi) < 1e-9 or swing_angle(c, axis) > np.pi - 1e-6
     assert_quat_equal(clamp_swing_twist(c, axis, cone, (lo, hi)), c, atol=1e-9)
-    allowed = (swing_angle(q, axis) <= cone) and (lo <= twist_angle(q, axis) <= hi)
+    allowed = (swing_angle(q, axis) <= cone) and _off_range(twist_angle(q, axis), lo, hi) == 0
     if allowed:
         assert_quat_equal(c, q, atol=1e-12)
 
@@ -135,9 +148,26 @@ def test_clamp_picks_the_nearest_swing_and_twist(q, axis, lim):
     if np.linalg.norm(np.cross(a, qa)) > 1e-6:
         assert abs(np.dot(np.cross(a, qa), ca)) < 1e-9
     assert swing_angle(c, axis) == pytest.approx(min(swing_angle(q, axis), cone), abs=1e-9)
-    if swing_angle(q, axis) < np.pi - 1e-6:
-        assert twist_angle(c, axis) == pytest.approx(
-            np.clip(twist_angle(q, axis), lo, hi), abs=1e-9)
+    if swing_angle(q, axis) < np.pi - 1e-6:  # the nearest allowed twist, round the circle
+        theta = twist_angle(q, axis)
+        assert _off_range(twist_angle(c, axis), lo, hi) < 1e-9
+        assert _apart(twist_angle(c, axis), theta) == pytest.approx(_off_range(theta, lo, hi),
+                                                                    abs=1e-9)
+
+
+@pytest.mark.parametrize(("theta", "twist_range", "expected"), [
+    (-3.0, (-0.5, 3.0), 3.0),  # 0.28 round through -pi; -0.5 is 2.5 away
+    (-2.0, (-0.5, 3.0), 3.0),  # 1.28 against 1.5
+    (-1.5, (-0.5, 3.0), -0.5),  # 1.0 against 1.78
+    (np.pi, (-np.pi, -3.0), np.pi),  # pi is -pi, on the arc: unchanged
+    (2.9, (-np.pi, -3.0), -np.pi),  # 0.24 to -pi, through pi
+])
+def test_clamp_twist_goes_to_the_nearer_bound_round_the_circle(theta, twist_range, expected):
+    a = np.array([0.3, -0.4, 1.2])
+    swing = quat_from_axis_angle(np.cross(a, [1.0, 0.0, 0.0]), 0.4)  # inside the cone
+    q = quat_mul(swing, quat_from_axis_angle(a, theta))
+    c = clamp_swing_twist(q, a, 1.0, twist_range)
+    assert_quat_equal(c, quat_mul(swing, quat_from_axis_angle(a, expected)), atol=1e-12)
 
 
 def test_clamp_example_shoulder_cone():

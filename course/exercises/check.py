@@ -13,11 +13,15 @@ from __future__ import annotations
 
 import ast
 import copy
+import ctypes
 import html
 import importlib
 import inspect
+import io
 import textwrap
+import threading
 from collections.abc import Callable, Sequence
+from contextlib import redirect_stdout
 from dataclasses import dataclass, replace
 from functools import cache
 from typing import TYPE_CHECKING, Any
@@ -29,6 +33,7 @@ if TYPE_CHECKING:  # the autograder loads on the first check, not with the noteb
     from autograder.spec import Assignment, Case, Function, Misconception
 
 _NOT_YET = "… {key}: not yet — write the body, then run this again"
+_PRINTED_CHARS = 4000  # of what the student's function prints, shown below the check
 
 #: The notebooks with exercises, by number (``nb02.py`` for ``"02"``).
 NOTEBOOKS = ("01", "02", "03", "04", "05", "06", "07", "08", "09", "10", "11", "12")
@@ -88,13 +93,25 @@ def exercises(notebook: str) -> tuple[Exercise, ...]:
     return found
 
 
+class UnknownExercise(KeyError):
+    """No exercise has that name (its message is shown as written, not quoted as a key)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
 def exercise(key: str) -> Exercise:
     """The exercise ``key``, ``"<notebook>.<name>"`` (``"02.fk_step"``)."""
+    if not isinstance(key, str):
+        raise TypeError(f"an exercise is named by a string such as '02.fk_step', "
+                        f"got {type(key).__name__}")
     notebook, _, name = key.partition(".")
-    found = {e.key: e for e in exercises(notebook)}
+    found = {e.key: e for e in exercises(notebook)} if notebook in NOTEBOOKS else {}
     if name not in found:
-        raise KeyError(f"no exercise {key!r}; notebook {notebook} has "
-                       f"{', '.join(f'{notebook}.{k}' for k in found)}")
+        known = (f"notebook {notebook} has {', '.join(f'{notebook}.{k}' for k in found)}"
+                 if found else "the exercises are " + ", ".join(
+                     f"{nb}.{e.key}" for nb in NOTEBOOKS for e in exercises(nb)))
+        raise UnknownExercise(f"no exercise {key!r}; {known}")
     return found[name]
 
 
@@ -135,6 +152,15 @@ def check(key: str, student: Callable[..., Any]) -> Feedback:
         ``pass``; ``fail`` with the first failing case (its inputs, what came back and what
         was expected) and the known mistake that explains every failure, if any; or
         ``not_yet`` while the body is still ``...`` or raises ``NotImplementedError``.
+
+    Each call may take as long as the grader allows a case (2 s); one that takes longer is
+    stopped and reported, and the cases after it are not run. What the function prints is
+    shown below the check, its first few thousand characters.
+
+    Raises
+    ------
+    TypeError, UnknownExercise
+        If ``key`` is not a string, or names no exercise (the message lists them).
     """
     from autograder.runner import diagnose, judge, prepare
 
@@ -148,15 +174,17 @@ def check(key: str, student: Callable[..., Any]) -> Feedback:
     assignment = _assignment(notebook)
     prepared = next(p for p in prepare(assignment, None) if p.test.name == ex.key)
     named = replace(ex.function, name=getattr(student, "__name__", ex.function.name))
-    results = [judge(named, case, expected, _call(student, case.args), None, _nowhere,
+    results = [judge(named, case, expected, out, None, _nowhere,
                      assignment.misconceptions_of(ex.function.name))
-               for case, expected in zip(prepared.cases, prepared.expected, strict=True)]
+               for case, expected, out in zip(prepared.cases, prepared.expected,
+                                              _calls(student, prepared.cases), strict=True)]
     if all(r.kind == "not_implemented" for r in results):
         return Feedback(key, "not_yet", _NOT_YET.format(key=key))
     failing = [r for r in results if not r.passed]
     if not failing:
         return Feedback(key, "pass", f"✓ {key}: all {len(results)} cases pass")
-    return Feedback(key, "fail", _failure_text(key, ex.function, results, failing[0],
+    first = next((r for r in failing if r.kind == "timeout"), failing[0])  # the urgent one
+    return Feedback(key, "fail", _failure_text(key, ex.function, results, first,
                                                diagnose(assignment, ex.function, results)))
 
 
@@ -175,19 +203,142 @@ def _where(exc: BaseException, student: Callable[..., Any]) -> dict[str, Any] | 
     return {"line": frames[-1].lineno, "code": frames[-1].line or ""} if frames else None
 
 
-def _call(student: Callable[..., Any], args: tuple[Any, ...]) -> Any:
+def _calls(student: Callable[..., Any], cases: Sequence[Case]) -> list[Any]:
+    """The student's function on each case, as :func:`_call` outcomes, with what it prints
+    captured and shown afterwards, cut to :data:`_PRINTED_CHARS` (a print in a loop can
+    write megabytes, more than a notebook cell can show). After a case that runs out of
+    time the rest are skipped: each could take as long again."""
+    from autograder.sandbox import Limits, Outcome
+
+    limit = Limits().case_timeout  # the grader's limit: what is too slow here is too slow there
+    printed = _Printed(_PRINTED_CHARS)
+    outcomes: list[Any] = []
+    with redirect_stdout(printed):
+        for case in cases:
+            outcomes.append(_call(student, case.args, limit))
+            if outcomes[-1].status == "timeout":
+                break
+    printed.show()
+    skipped = Outcome("skipped", message="not run: an earlier case ran out of time")
+    return outcomes + [skipped] * (len(cases) - len(outcomes))
+
+
+def _call(student: Callable[..., Any], args: tuple[Any, ...], limit: float) -> Any:
     """The call as the runner's :class:`~autograder.sandbox.Outcome`: the returned value
-    through the sandbox's own encoding (so it is validated the same way), or the error."""
+    through the sandbox's own encoding (so it is validated the same way), the error, or a
+    ``timeout`` if it took longer than ``limit`` seconds."""
     from autograder.protocol import decode_value, encode_value
     from autograder.sandbox import Outcome
 
+    args = copy.deepcopy(args)  # a function that edits its input in place
+    timer = _TimeLimit(limit)
+    error = None
     try:
-        with np.errstate(all="ignore"):
-            out = student(*copy.deepcopy(args))  # a function that edits its input in place
+        with np.errstate(all="ignore"), timer:  # the timer innermost: disarmed first
+            out = student(*args)
+    except _OutOfTime:
+        pass  # timer.fired says so
     except Exception as exc:  # the student's code: any error is feedback, not a crash
-        return Outcome("error", error={"type": type(exc).__name__, "message": str(exc)[:300],
-                                       "where": _where(exc, student)})
+        error = {"type": type(exc).__name__, "message": _message(exc),
+                 "where": _where(exc, student)}
+    if timer.fired:  # even if the student's code caught _OutOfTime and went on
+        name = getattr(student, "__name__", "your function")
+        return Outcome("timeout", message=(
+            f"{name} took longer than {limit:g} s on this case and was stopped: an endless "
+            "loop, or far more work than the exercise needs? (the grader allows the same time)"))
+    if error is not None:
+        return Outcome("error", error=error)
     return Outcome("ok", value=decode_value(encode_value(out)))
+
+
+def _message(exc: BaseException) -> str:
+    """The start of ``str(exc)``, or nothing if the student's exception cannot say it (its
+    type is reported anyway)."""
+    try:
+        return str(exc)[:300]
+    except Exception:  # a broken __str__ of the student's own exception class
+        return ""
+
+
+class _OutOfTime(BaseException):
+    """Raised inside a student's call that ran out of time. A BaseException, so that the
+    student's own ``except Exception:`` does not swallow it."""
+
+
+class _TimeLimit:
+    """``with _TimeLimit(seconds):`` raises :class:`_OutOfTime` in this thread if the block
+    runs longer than ``seconds``; ``fired`` says whether it did.
+
+    Why this way: the student's code must run in the kernel's main thread (where a Jupyter
+    "interrupt" lands, and where plotting and widgets expect it), on Linux, macOS and Windows
+    alike: so no SIGALRM and no killable process. A timer thread asks CPython to raise an
+    exception in this thread (``PyThreadState_SetAsyncExc``), which happens at its next
+    bytecode: a Python loop stops at once, a long call into C (``time.sleep``, a huge matrix
+    product) only when it returns, and a C call that never returns cannot be stopped this
+    way (interrupt or restart the kernel). The timer fires once, under a lock, only while
+    armed; leaving the block disarms it and clears an exception posted but not yet raised,
+    so none can surface later. That exception may still arrive while the block is being left:
+    catch it around the whole ``with``.
+    """
+
+    def __init__(self, seconds: float) -> None:
+        self.fired = False
+        self._armed = True
+        self._lock = threading.Lock()
+        self._target = threading.get_ident()
+        self._watchdog = threading.Timer(seconds, self._fire)
+        self._watchdog.daemon = True
+
+    def __enter__(self) -> _TimeLimit:
+        self._watchdog.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        with self._lock:
+            self._armed = False
+            if self.fired:
+                _post(self._target, None)
+        self._watchdog.cancel()
+
+    def _fire(self) -> None:
+        with self._lock:
+            if self._armed:
+                self.fired = True
+                _post(self._target, _OutOfTime)
+
+
+def _post(thread: int, exc: type[BaseException] | None) -> None:
+    """Have CPython raise ``exc`` in ``thread`` at its next bytecode (None: clear a pending
+    one)."""
+    ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread),
+                                               None if exc is None else ctypes.py_object(exc))
+
+
+class _Printed(io.TextIOBase):
+    """Text written to it, up to ``keep`` characters; beyond that only counted."""
+
+    def __init__(self, keep: int) -> None:
+        super().__init__()
+        self.kept: list[str] = []
+        self.room, self.dropped = keep, 0
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, text: str) -> int:
+        shown = text[:self.room]
+        if shown:
+            self.kept.append(shown)
+        self.room -= len(shown)
+        self.dropped += len(text) - len(shown)
+        return len(text)
+
+    def show(self) -> None:
+        """Print what was kept, and how much was not."""
+        print("".join(self.kept), end="")
+        if self.dropped:
+            print(f"\n… and {self.dropped:,} more characters printed by your function, "
+                  "not shown")
 
 
 def _failure_text(key: str, fn: Function, results: list[CaseResult], first: CaseResult,

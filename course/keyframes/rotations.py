@@ -41,6 +41,7 @@ from ..rotations._kernels import quat_mul as _mul
 from .curves import _column, check_keys, check_t, segments
 
 Array = NDArray[np.float64]
+_CONJUGATE = np.array([1.0, -1.0, -1.0, -1.0])  # times a unit quaternion: its inverse
 
 
 def _unit_keys(q_keys: ArrayLike, times: ArrayLike, name: str = "q_keys"
@@ -109,8 +110,16 @@ def _log(q: Array) -> Array:
 
 
 def _segment_logs(q: Array) -> Array:
-    r""":math:`\log(q_i^{-1} q_{i+1})` of neighbouring keys (K, ..., 4) -> (K-1, ..., 3)."""
-    return quat_log(rot.quat_mul(rot.quat_conjugate(q[:-1]), q[1:]))
+    r""":math:`\log(q_i^{-1} q_{i+1})` of neighbouring quaternions (K, ..., 4) -> (K-1, ..., 3),
+    along the great arc between them **as stored** (no sign chosen, up to 180° on the sphere).
+
+    For keys after :func:`same_hemisphere` that arc is the shortest turn anyway. SQUAD's
+    controls must not be re-signed: :math:`s_i` and :math:`s_{i+1}` each sit within 45° of
+    their own key, so with keys more than ~120° of rotation apart they can land in opposite
+    hemispheres, and the shortest turn from :math:`s_i` would head for :math:`-s_{i+1}`, the
+    other way round, and the curve would swing back and jump in angular velocity at the key.
+    """
+    return _log(_mul(q[:-1] * _CONJUGATE, q[1:]))
 
 
 def slerp_keys(q_keys: ArrayLike, times: ArrayLike, t: ArrayLike) -> Array:
@@ -196,7 +205,10 @@ def squad(q_keys: ArrayLike, times: ArrayLike, t: ArrayLike) -> Array:
     neighbours) and the controls :math:`s_i` are :func:`squad_controls`. The curve passes
     through every key (:math:`2u(1-u) = 0` at both ends) and its angular velocity is
     continuous across keys. Each :math:`s_i` lies within 45° (on the unit sphere) of its
-    key, so the outer blend never needs to flip a sign (its shortest path is the one meant).
+    key, so the outer blend never needs to flip a sign. The inner SLERP runs along the arc
+    from :math:`s_i` to :math:`s_{i+1}` as they are, not the shortest turn between their
+    rotations: the two differ once neighbouring keys are more than ~120° apart, and only the
+    first keeps the curve C¹ (:func:`_segment_logs`).
 
     Parameters
     ----------
@@ -219,7 +231,7 @@ def squad(q_keys: ArrayLike, times: ArrayLike, t: ArrayLike) -> Array:
     uc = _column(u, q.ndim - 1)
     along = _mul(q[i], _exp(uc * _segment_logs(q)[i]))  # slerp(q_i, q_i+1, u)
     inner = _mul(s[i], _exp(uc * _segment_logs(s)[i]))  # slerp(s_i, s_i+1, u)
-    blend = _log(_mul(along * np.array([1.0, -1.0, -1.0, -1.0]), inner))
+    blend = _log(_mul(along * _CONJUGATE, inner))
     return _mul(along, _exp(2 * uc * (1 - uc) * blend))
 
 

@@ -30,6 +30,7 @@ sums the new values into place. scipy is imported only when a step needs it.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Any, Literal, NamedTuple
@@ -270,7 +271,9 @@ class NewtonStats:
     gradient_norm : ``‖∇E‖₂`` over the free coordinates at the returned ``x``.
     converged : ``gradient_norm <= threshold``.
     threshold : the absolute stopping threshold ``tol · f`` (N), ``f`` the force scale: the
-        norm of the free particles' weights ``(m_i g)``, or of the first gradient if larger.
+        norm of the free particles' weights ``(m_i g)``, or of the first gradient if larger;
+        never below the rounding error of ``∇E`` itself (``100 ε`` times the size of its
+        terms, ``‖m‖ |x| / h²`` and ``‖k‖ |x|``), which it can reach when both are ~0.
     pd_fixes : iterations whose Hessian was not positive definite and was fixed (its spring
         blocks projected to PSD, see :func:`step`'s ``pd_fix``).
     projected : spring blocks clamped by those fixes, summed over the iterations.
@@ -288,6 +291,23 @@ class NewtonStats:
     projected: int
     fallbacks: int
     history: tuple[float, ...] = ()
+
+
+class NotConvergedWarning(RuntimeWarning):
+    """An implicit step's Newton solve stopped (``max_iter``, or a non-finite gradient)
+    before ``‖∇E‖`` reached its threshold: the positions returned are not the implicit Euler
+    answer. Said by :func:`implicit_euler_step` and :func:`simulate`, which return no
+    :class:`NewtonStats` of their own; :func:`step` returns them (``stats.converged``)."""
+
+    @classmethod
+    def about(cls, where: str, stats: NewtonStats, which: str = "",
+              more: str = "course.physics.step returns its NewtonStats") -> NotConvergedWarning:
+        """The warning for ``stats``, said by ``where`` of step ``which``; ``more`` says
+        where to find the statistics."""
+        return cls(f"{where}: Newton's method stopped{which} after {stats.iterations} "
+                   f"iterations with ‖∇E‖ = {stats.gradient_norm:.3g} N, above its stopping "
+                   f"threshold {stats.threshold:.3g} N (tol × the force scale): not the "
+                   f"implicit Euler answer. Raise max_iter, or take a smaller h; {more}.")
 
 
 class StepResult(NamedTuple):
@@ -450,10 +470,17 @@ def _newton(system: SpringSystem, x: Array, v: Array, h: float, *, tol: float, m
     # the force scale tol is relative to: the free particles' weight (or the first gradient)
     scale = max(float(np.linalg.norm(system.masses[free])) * float(np.linalg.norm(
         system.gravity)), float(np.linalg.norm(g)), 1e-300)
+    # ... and never below what rounding lets ‖∇E‖ reach: without gravity, near rest, the
+    # scale above tends to 0 and Newton would chase rounding noise to max_iter (and report
+    # no convergence). ∇E sums terms M x / h² and k d, each rounded to ε of its size; 100 ε
+    # leaves room for the sums over many springs.
+    size = max(float(np.abs(x).max(initial=0.0)), float(np.abs(y).max(initial=0.0)))
+    threshold = max(tol * scale, 100 * np.finfo(float).eps * size * (
+        float(np.linalg.norm(system.masses[free])) / h**2 + float(np.linalg.norm(system.k))))
     backtracks = projected = pd_fixes = fallbacks = iterations = 0
     e_k = _objective(system, x_k, y, h)
     history = [float(np.linalg.norm(g))]
-    while np.linalg.norm(g) > tol * scale and iterations < max_iter:
+    while np.linalg.norm(g) > threshold and iterations < max_iter:
         # inexact Newton (CG): solve to a relative residual of 1% (looser costs more Newton
         # iterations than it saves, measured on 30x30 and 50x50 cloths), tighter near the
         # answer so that convergence stays superlinear
@@ -487,7 +514,7 @@ def _newton(system: SpringSystem, x: Array, v: Array, h: float, *, tol: float, m
     g_norm = float(np.linalg.norm(g))
     v_new = (x_k - x) / h
     v_new[system.fixed] = 0.0
-    stats = NewtonStats(iterations, backtracks, g_norm, bool(g_norm <= tol * scale), tol * scale,
+    stats = NewtonStats(iterations, backtracks, g_norm, bool(g_norm <= threshold), threshold,
                         pd_fixes, projected, fallbacks, tuple(history))
     return StepResult(x_k, v_new, stats)
 
@@ -504,7 +531,8 @@ def step(system: SpringSystem, x: ArrayLike, v: ArrayLike, h: float, method: Met
     h : time step (s), > 0.
     method : ``"explicit"``, ``"symplectic"`` or ``"implicit"``.
     tol : implicit only: Newton stops when ``‖∇E‖₂ <= tol · f`` over the free coordinates,
-        ``f`` a force scale (:class:`NewtonStats`' ``threshold``): a relative tolerance.
+        ``f`` a force scale (:class:`NewtonStats`' ``threshold``, with its rounding floor): a
+        relative tolerance.
     max_iter : implicit only: at most this many Newton iterations.
     line_search : implicit only: backtrack (Armijo) instead of always taking the full step.
     pd_fix : implicit only, the positive-definite fix. ``∇²E = M/h² + Σ H_s`` stops being
@@ -619,9 +647,18 @@ def implicit_euler_step(x: ArrayLike, v: ArrayLike, masses: ArrayLike, springs: 
     -------
     x, v : (N, 3) positions and velocities at step n + 1. Check a step's optimality with
     :func:`implicit_euler_gradient` (it is ``≈ 0`` at the answer).
+
+    Warns
+    -----
+    NotConvergedWarning
+        If Newton's method stopped before converging (its numbers in the message; a stiff
+        system with a large ``h`` can need more than the default 50 iterations).
     """
     system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
-    x_new, v_new, _ = step(system, x, v, h, "implicit", **options)
+    x_new, v_new, stats = step(system, x, v, h, "implicit", **options)
+    assert stats is not None  # the implicit method reports
+    if not stats.converged:
+        warnings.warn(NotConvergedWarning.about("implicit_euler_step", stats), stacklevel=2)
     return x_new, v_new
 
 
@@ -681,13 +718,19 @@ class Trajectory:
         total: Array = self.energy.sum(axis=1)
         return total
 
+    @property
+    def unconverged(self) -> list[int]:
+        """The implicit steps (numbered from 1) whose Newton solve did not converge."""
+        return [n for n, s in enumerate(self.stats, 1) if not s.converged]
+
 
 def simulate(system: SpringSystem, x: ArrayLike, v: ArrayLike, h: float, n_steps: int,
              method: Method = "implicit", *, blowup: float = 1e3,
              **options: Any) -> Trajectory:
     """Run ``n_steps`` steps of :func:`step`, recording states and energies; stops early when
     the simulation explodes (a non-finite state, or a particle farther than ``blowup`` sizes
-    from the start's centre)."""
+    from the start's centre). Warns once (:class:`NotConvergedWarning`) if any implicit
+    step's Newton solve did not converge (:attr:`Trajectory.unconverged` lists them)."""
     x, v = _state(system, x, v)
     if int(n_steps) != n_steps or n_steps < 0:
         raise ValueError(f"n_steps: must be a non-negative integer, got {n_steps!r}")
@@ -707,4 +750,11 @@ def simulate(system: SpringSystem, x: ArrayLike, v: ArrayLike, h: float, n_steps
             xs.append(x)
             vs.append(v)
             energies.append(system.energy(x, v))
-    return Trajectory(np.stack(xs), np.stack(vs), np.array(energies), stats, exploded)
+    run = Trajectory(np.stack(xs), np.stack(vs), np.array(energies), stats, exploded)
+    if run.unconverged:
+        first = run.unconverged[0]
+        warnings.warn(NotConvergedWarning.about(
+            "simulate", stats[first - 1], f" in step {first}", f"{len(run.unconverged)} of "
+            f"{len(stats)} steps did not converge (the run's unconverged and stats)"),
+            stacklevel=2)
+    return run

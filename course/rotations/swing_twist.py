@@ -117,6 +117,23 @@ def swing_angle(q: ArrayLike, axis: ArrayLike) -> Array:
     return angle
 
 
+def _clamp_on_circle(theta: Array, lo: Array, hi: Array) -> Array:
+    r"""Angles ``theta`` in :math:`[-\pi, \pi]` moved into the arc from ``lo`` up to ``hi``
+    (:math:`-\pi \le lo \le hi \le \pi`) **on the circle**: an angle on the arc stays (so
+    :math:`\pi` stays in :math:`[-\pi, -3]`, where it is :math:`-\pi`); one off it goes to
+    the bound nearer round the circle, which across :math:`\pm\pi` is not the nearer number:
+    -3.0 with the arc [-0.5, 3.0] goes to 3.0 (0.28 away), not to -0.5 (2.5 away).
+
+    Measured from the arc's middle and wrapped to :math:`[-\pi, \pi]`, an angle is on the arc
+    within half its length, above it nearer ``hi`` and below it nearer ``lo``.
+    (:func:`course.ik._engine.components.clamp_swing_twist` does the same on components.)
+    """
+    off = theta - 0.5 * (lo + hi)
+    off = np.arctan2(np.sin(off), np.cos(off))
+    clamped: Array = np.where(np.abs(off) <= 0.5 * (hi - lo), theta, np.where(off > 0, hi, lo))
+    return clamped
+
+
 def clamp_swing_twist(
     q: ArrayLike,
     axis: ArrayLike,
@@ -127,7 +144,8 @@ def clamp_swing_twist(
 
     The swing is kept about its own axis and its angle clamped to ``max_swing`` (the nearest
     swing inside the cone, along the great circle towards the identity); the twist angle is
-    clamped to ``twist_range`` (the nearest allowed twist). The result is
+    clamped to ``twist_range`` on the circle (the nearest allowed twist, also across
+    :math:`\pm\pi`: :func:`_clamp_on_circle`). The result is
     :math:`s' \otimes t'`. A rotation already inside the limits comes back unchanged (up to
     sign), and clamping twice changes nothing more. Each part is the nearest allowed one; the
     product is the nearest in this swing–twist sense, not always the geodesically nearest
@@ -179,9 +197,9 @@ def clamp_swing_twist(
     scale = np.where(sin_half > 0, np.sin(new_half) / np.where(sin_half > 0, sin_half, 1.0), 0.0)
     swing = np.concatenate([np.cos(new_half)[..., None], swing[..., 1:] * scale[..., None]], -1)
 
-    # Twist: angle about a, clamped.
-    theta = np.clip(2.0 * np.arctan2(np.einsum("...i,...i->...", twist[..., 1:], a),
-                                     twist[..., 0]), lo, hi)
+    # Twist: angle about a, clamped on the circle.
+    theta = _clamp_on_circle(2.0 * np.arctan2(np.einsum("...i,...i->...", twist[..., 1:], a),
+                                              twist[..., 0]), lo, hi)
     twist = np.concatenate([np.cos(theta / 2)[..., None], np.sin(theta / 2)[..., None] * a], -1)
     out = quat_mul(swing, twist)
     return np.where(out[..., :1] < 0, -out, out)

@@ -167,8 +167,9 @@ def limit(R: Quat, lim: Limit, ops: Ops) -> Quat:
 def clamp_swing_twist(q: Quat, axis: Vec, cone: float, lo: float, hi: float, ops: Ops) -> Quat:
     r""":func:`course.rotations.clamp_swing_twist` on components: :math:`q = s\otimes t`
     (twist :math:`t \propto (w, (v\cdot a)\,a)`, the identity at the half-turn singularity),
-    the swing's angle capped at ``cone`` about its own axis, the twist angle clipped to
-    ``[lo, hi]``, and :math:`s'\otimes t'` returned in the sign of ``q``."""
+    the swing's angle capped at ``cone`` about its own axis, the twist angle clamped to
+    ``[lo, hi]`` on the circle (as ``course.rotations.swing_twist._clamp_on_circle``), and
+    :math:`s'\otimes t'` returned in the sign of ``q``."""
     sign = ops.where(q[0] < 0, -1.0, 1.0)  # canonical (w >= 0), as the checked function
     w, x, y, z = q[0] * sign, q[1] * sign, q[2] * sign, q[3] * sign
     p = x * axis[0] + y * axis[1] + z * axis[2]
@@ -180,7 +181,11 @@ def clamp_swing_twist(q: Quat, axis: Vec, cone: float, lo: float, hi: float, ops
     sin_half = ops.sqrt(sx * sx + sy * sy + sz * sz)
     half = 0.5 * ops.minimum(2.0 * ops.atan2(sin_half, sw), cone)
     k = ops.where(sin_half > 0, ops.sin(half) / ops.where(sin_half > 0, sin_half, 1.0), 0.0)
-    theta = 0.5 * ops.minimum(ops.maximum(2.0 * ops.atan2(tp, tw), lo), hi)
+    twist = 2.0 * ops.atan2(tp, tw)
+    off = twist - 0.5 * (lo + hi)
+    off = ops.atan2(ops.sin(off), ops.cos(off))  # from the range's middle, round the circle
+    theta = 0.5 * ops.where(ops.abs(off) <= 0.5 * (hi - lo), twist,
+                            ops.where(off > 0, hi, lo))
     st = ops.sin(theta)
     out = quat_mul((ops.cos(half), sx * k, sy * k, sz * k),
                    (ops.cos(theta), st * axis[0], st * axis[1], st * axis[2]))
