@@ -146,7 +146,11 @@ def _take_pipes() -> tuple[int, int]:
     if os.name == "posix":
         os.closerange(3, 1 << 16)
     req, res = os.dup(0), os.dup(1)
-    null = os.open(os.devnull, os.O_RDONLY | getattr(os, "O_BINARY", 0))
+    try:
+        null = os.open(os.devnull, os.O_RDONLY | getattr(os, "O_BINARY", 0))
+    except OSError:  # a jail without a null device: a pipe whose writer is gone reads as empty
+        null, writer = os.pipe()
+        os.close(writer)
     os.dup2(null, 0)
     os.close(null)
     os.dup2(2, 1)

@@ -13,8 +13,8 @@ from pathlib import Path
 from .assignments import KEYS, load
 from .grading import collect, grade
 from .lms import FILES as LMS_FILES
-from .runner import default_submission, run, seed_from_env
-from .sandbox import LEVELS, level_for, weaker_warning
+from .runner import default_submission, read_seed, run, seed_from_env
+from .sandbox import FLOOR, LEVELS, level_for, weaker_warning
 from .submission import printable
 
 
@@ -26,7 +26,9 @@ def main(argv: list[str] | None = None) -> int:
     c.add_argument("assignment", choices=KEYS)
     c.add_argument("--submission", type=Path, help="a .py or .ipynb file (default: the "
                    "template, e.g. assignments/a1_rotations.py)")
-    c.add_argument("--seed", help="instructors: the secret seed, to add the hidden tests")
+    c.add_argument("--seed-file", help="instructors: a file holding the secret seed (- for "
+                   "standard input), to add the hidden tests")
+    c.add_argument("--seed", help=argparse.SUPPRESS)  # deprecated: argv is readable by all
     c.add_argument("--isolation", choices=LEVELS, help="the sandbox's isolation (default: the "
                    "strongest this machine allows)")
 
@@ -42,14 +44,17 @@ def main(argv: list[str] | None = None) -> int:
     g.add_argument("submissions", nargs="+", type=Path, help=".py/.ipynb files or folders")
     g.add_argument("--out", required=True, type=Path, help="folder for the results")
     g.add_argument("--jobs", type=int, default=1, help="submissions graded at once")
-    g.add_argument("--seed", help="secret seed of the hidden tests (or $AUTOGRADER_SEED)")
+    g.add_argument("--seed-file", help="a file holding the secret seed of the hidden tests "
+                   "(- for standard input; or $AUTOGRADER_SEED)")
+    g.add_argument("--seed", help=argparse.SUPPRESS)  # deprecated: argv is readable by all
     g.add_argument("--isolation", choices=LEVELS, help="the sandbox's isolation (default: the "
                    "strongest this machine allows)")
     g.add_argument("--scheduler", metavar="ADDRESS", help="grade on a Dask cluster: a "
                    "scheduler's address, or local[:N] for N worker processes here (needs the "
                    "'cluster' extra)")
-    g.add_argument("--min-isolation", choices=LEVELS, help="with --scheduler: refuse workers "
-                   "weaker than this (default: the strongest the scheduler's machine gives)")
+    g.add_argument("--min-isolation", choices=LEVELS, help=f"refuse to grade (here, or on a "
+                   f"--scheduler's workers) below this level (default: {FLOOR}; with "
+                   "--scheduler, the strongest the scheduler's machine gives if stronger)")
     g.add_argument("--resume", action="store_true", help="skip submissions already graded "
                    "in --out and unchanged since")
     g.add_argument("--lms", action="append", default=[], choices=LMS_FILES, help="also write "
@@ -66,9 +71,11 @@ def main(argv: list[str] | None = None) -> int:
         print(built_message(args.out, made), file=sys.stderr)
         return 0
     spec = load(args.assignment)
-    seed = seed_from_env(args.seed)
     try:
-        level = level_for(args.isolation)
+        seed = _seed(args)
+        floor = None if args.command == "check" or args.scheduler else (
+            args.min_isolation or FLOOR)
+        level = level_for(args.isolation, floor)
     except ValueError as exc:
         parser.error(str(exc))
     if args.command == "check":
@@ -84,12 +91,13 @@ def main(argv: list[str] | None = None) -> int:
                          "file")
         result = run(spec, path, seed, level=level)
         print(result)
+        if level.rank > FLOOR.rank:  # a laptop: fine for one's own work, not for a class
+            print(f"(Checked at isolation {level}: fine for your own code; a class is graded "
+                  f"at {FLOOR} or stronger.)", file=sys.stderr)
         return 0 if result.score >= result.max_score else 1
     if args.scheduler and args.isolation:
         parser.error("--isolation: with --scheduler each worker grades at its strongest; "
                      "give --min-isolation instead")
-    if args.min_isolation and not args.scheduler:
-        parser.error("--min-isolation: only with --scheduler (here, give --isolation)")
     try:
         submissions = collect(args.submissions, spec.template)
     except ValueError as exc:
@@ -97,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     if not submissions:
         parser.error("submissions: no .py or .ipynb files found")
     if not seed:
-        print("warning: no --seed or $AUTOGRADER_SEED: grading the visible tests only",
+        print("warning: no --seed-file or $AUTOGRADER_SEED: grading the visible tests only",
               file=sys.stderr)
     warning = weaker_warning(level)
     if warning:
@@ -120,3 +128,17 @@ def main(argv: list[str] | None = None) -> int:
           f"{printable(args.out / 'grades.csv')}",
           file=sys.stderr)
     return 0
+
+
+def _seed(args: argparse.Namespace) -> str | None:
+    """The secret seed: ``--seed-file``, else the deprecated ``--seed`` (with a warning),
+    else ``$AUTOGRADER_SEED``."""
+    if args.seed_file and args.seed:
+        raise ValueError("--seed: give --seed-file or --seed, not both")
+    if args.seed_file:
+        return read_seed(args.seed_file)
+    if args.seed:
+        print("warning: --seed puts the secret seed in the command line, which every process "
+              "of this machine can read (/proc/PID/cmdline); use --seed-file FILE (or - for "
+              "standard input). --seed will be removed in the next release.", file=sys.stderr)
+    return seed_from_env(args.seed)

@@ -8,7 +8,8 @@ batch's record of the submission, plain data (:func:`autograder.records.record`)
 grading process writes every output file.
 
 Before any work, each worker reports the isolation level it reached, and a worker weaker than
-``min_isolation`` (default: the strongest the scheduler's own machine gives) stops the batch
+``min_isolation`` (default: the strongest the scheduler's own machine gives, and never below
+:data:`autograder.sandbox.FLOOR`) stops the batch
 with its name; a worker that joins later checks the same before each task. A worker that dies
 while grading costs only a retry of the submissions it held: the scheduler runs them again
 elsewhere, up to its ``distributed.scheduler.allowed-failures`` times (:data:`RETRIES` on a
@@ -32,7 +33,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .records import Job, grader_failed, not_run, record
-from .sandbox import LEVELS, Isolation, Limits, probe
+from .sandbox import FLOOR, LEVELS, Isolation, Limits, probe
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -139,14 +140,15 @@ def _client(scheduler: str) -> Iterator[Client]:
 
 
 def _minimum(client: Client, requested: str | None) -> str:
-    """``requested``, else the strongest level the scheduler's machine reaches."""
+    """``requested``, else the strongest level the scheduler's machine reaches, or
+    :data:`~autograder.sandbox.FLOOR` if that is weaker."""
     if requested is not None:
         if requested not in LEVELS:
             raise ValueError(f"--min-isolation: {requested!r} is not one of {', '.join(LEVELS)}")
         return requested
     try:
-        level: str = client.run_on_scheduler(worker_level)
-        return level
+        level = Isolation(client.run_on_scheduler(worker_level))
+        return min(level, FLOOR, key=lambda x: x.rank).value
     except Exception as exc:  # autograder not installed beside the scheduler, say
         raise ValueError("--min-isolation: the scheduler could not say which isolation its "
                          f"machine reaches ({type(exc).__name__}: {exc}); give "

@@ -39,7 +39,7 @@ from .records import Job, grader_failed, not_run, record
 from .report import create, write_csv
 from .results import Result
 from .runner import prepare, run
-from .sandbox import DEFAULT_LIMITS, Limits, level_for
+from .sandbox import DEFAULT_LIMITS, FLOOR, Limits, level_for
 from .spec import Assignment
 from .submission import SubmissionError, printable, read_regular
 
@@ -241,11 +241,13 @@ def grade(assignment: Assignment, submissions: Sequence[Submission | tuple[str, 
     class summary ``out/summary.html`` and an ``out/grades-<lms>.csv`` per name in ``lms``
     (:mod:`autograder.lms`). Returns the rows of ``grades.csv``.
 
-    ``level``: the sandbox's isolation here (default: the strongest here). ``scheduler``: a
-    Dask scheduler's address, or ``local[:N]``, to grade on a cluster instead
-    (:mod:`autograder.cluster`, whose workers must reach ``min_isolation``); without it no
-    Dask is imported. ``resume``: a submission whose files, assignment, seed, limits and
-    grader are those recorded in ``out/<name>/grading.json`` is not graded again.
+    ``level``: the sandbox's isolation here (default: the strongest here); below
+    ``min_isolation`` (default :data:`~autograder.sandbox.FLOOR`) nothing is graded: a
+    ``ValueError`` says what is missing. ``scheduler``: a Dask scheduler's address, or
+    ``local[:N]``, to grade on a cluster instead (:mod:`autograder.cluster`, whose workers
+    must reach ``min_isolation``); without it no Dask is imported. ``resume``: a submission
+    whose files, assignment, seed, limits and grader are those recorded in
+    ``out/<name>/grading.json`` is not graded again.
 
     Names are made safe and unique again (:func:`unique`: unchanged for :func:`collect`'s);
     a submission that cannot be read gets score 0 and the reason, like any refused one.
@@ -254,6 +256,7 @@ def grade(assignment: Assignment, submissions: Sequence[Submission | tuple[str, 
     told apart is a ``ValueError`` (after ``grades.csv`` and the summary are written).
     """
     subs = unique([s if isinstance(s, Submission) else Submission(*s) for s in submissions])
+    here = level_for(level, min_isolation or FLOOR) if not scheduler else level_for(level)
     out.mkdir(parents=True, exist_ok=True)
     root = out.resolve()
     prepare(assignment, seed)  # once, before the threads start
@@ -275,11 +278,11 @@ def grade(assignment: Assignment, submissions: Sequence[Submission | tuple[str, 
         local = [s for s, job in todo if job is None]  # refused or unreadable: nothing to send
         remote = [job for _, job in todo if job is not None]
         graded = itertools.chain(
-            _on_pool(assignment, [(s, None) for s in local], 1, seed, limits, level_for(level)),
+            _on_pool(assignment, [(s, None) for s in local], 1, seed, limits, here),
             grade_on_cluster(assignment, remote, scheduler, seed=seed, limits=limits,
                              min_isolation=min_isolation))
     else:
-        graded = _on_pool(assignment, todo, jobs, seed, limits, level_for(level))
+        graded = _on_pool(assignment, todo, jobs, seed, limits, here)
     for name, rec in graded:
         _write_results(root, name, rec)
         records[name] = rec

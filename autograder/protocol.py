@@ -31,6 +31,7 @@ import numpy as np
 MAX_FRAME = 8 << 20  # a single rotation's answer is tiny; this only bounds garbage
 MAX_ITEMS = 1 << 20  # numbers in one returned array
 MAX_STR = 200  # characters kept of a returned string (a joint name, say)
+MAX_INT_DIGITS = 19  # an int64's; the child sends numbers as floats, so a longer int is forged
 _asarray = np.asarray  # bound now: a submission may monkeypatch numpy later
 
 
@@ -67,11 +68,20 @@ def read_frame(fd: int, parse_at_most: int = MAX_FRAME) -> Any | None:
     if body is None:
         raise ProtocolError("stream ended inside a frame")
     try:
-        return json.loads(body)
+        return json.loads(body, parse_int=_bounded_int)
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ProtocolError(f"not JSON ({exc})") from None
     except RecursionError:  # '[[[[...' nested deeper than the parser goes: forged
         raise ProtocolError("JSON nested too deeply") from None
+
+
+def _bounded_int(digits: str) -> int:
+    """An integer of the frame, refused past an int64's digits: ``int()`` of a long digit
+    string costs quadratic time, and Python refuses more than 4300 digits with a ValueError
+    that is not the child's to raise in the grader."""
+    if len(digits.lstrip("-")) > MAX_INT_DIGITS:
+        raise ProtocolError(f"an integer of {len(digits)} digits")
+    return int(digits)
 
 
 def _read_exactly(fd: int, n: int) -> bytes | None:
@@ -209,6 +219,6 @@ def decode_value(obj: Any, depth: int = 0) -> Value:
                 raise ProtocolError("bad array")
             arr = np.array(data, dtype=np.float64).reshape(shape)
             return Value("array", type_name, arr, str(obj["dtype"])[:20])
-    except (KeyError, TypeError, AttributeError) as exc:
+    except (KeyError, TypeError, AttributeError, ValueError, OverflowError) as exc:
         raise ProtocolError(f"malformed value ({exc})") from None
     raise ProtocolError(f"unknown value kind {kind!r}")

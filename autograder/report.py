@@ -198,7 +198,7 @@ def _scored(result: Result) -> list[TestResult]:
 
 
 CSV_FIXED = ["submission", "score", "max_score", "status", "reason", "misconceptions",
-             "seconds"]
+             "seconds", "isolation"]
 
 
 def csv_header(result: Result) -> list[str]:
@@ -214,7 +214,7 @@ def csv_row(name: str, result: Result) -> dict[str, Any]:
     row: dict[str, Any] = {
         "submission": name, "score": round(result.score, 4), "max_score": result.max_score,
         "status": status, "reason": reason, "misconceptions": " ".join(found),
-        "seconds": round(result.elapsed, 2),
+        "seconds": round(result.elapsed, 2), "isolation": str(result.isolation),
     }
     row.update({t.test.name: round(t.score, 4) for t in _scored(result)})
     return row

@@ -7,6 +7,7 @@ sandbox sent back; the submission only ever sees its inputs.
 from __future__ import annotations
 
 import os
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -19,7 +20,7 @@ import numpy as np
 from .results import CaseResult, Result, TestResult
 from .sandbox import DEFAULT_LIMITS, Limits, Outcome, Sandbox, level_for
 from .spec import Assignment, Case, Function, Misconception, Test, case_rng
-from .submission import Source, SubmissionError, import_problems, read_source
+from .submission import Source, SubmissionError, import_problems, read_regular, read_source
 
 ASSIGNMENTS_DIR = Path(__file__).resolve().parents[1] / "assignments"
 
@@ -212,3 +213,27 @@ def _reproduces(m: Misconception, fn: Function, c: CaseResult) -> bool:
 def seed_from_env(seed: str | None) -> str | None:
     """``seed`` if given, else ``$AUTOGRADER_SEED`` (empty counts as none)."""
     return seed or os.environ.get("AUTOGRADER_SEED") or None
+
+
+MAX_SEED = 4096  # bytes of a seed file
+
+
+def read_seed(path: str) -> str:
+    """The secret seed from the first line of the file ``path`` (``-``: standard input),
+    which, unlike a command line, no other process of the machine can read. ValueError
+    names what is wrong."""
+    if path == "-":
+        text = sys.stdin.read(MAX_SEED + 1)
+        if len(text) > MAX_SEED:
+            raise ValueError(f"--seed-file -: more than {MAX_SEED} characters on standard "
+                             "input")
+    else:
+        try:
+            text = read_regular(Path(path), limit=MAX_SEED)
+        except SubmissionError as exc:
+            raise ValueError(f"--seed-file: {exc}") from None
+    lines = text.strip().splitlines()
+    if not lines or not lines[0].strip().isprintable():
+        raise ValueError(f"--seed-file {path}: its first line must be the seed (printable "
+                         "text)")
+    return lines[0].strip()

@@ -16,11 +16,15 @@ guarantees of each are in ``docs/sandbox.md``):
     library a submission may use, numpy, their shared libraries), the dynamic loader, the
     child's two files and ``/sandbox/work``, a tmpfs of ``Limits.disk_mb``: the one writable
     place. No host path, ``/proc`` included, exists there.
-``unprivileged`` (Linux, grader running as root, no user namespaces: Docker's default
-    seccomp profile, Ubuntu 24.04's AppArmor rule, some hosted graders)
-    the same minimal runtime run directly as :data:`SANDBOX_UID` in a working directory of
-    its own, with the process and file limits below and the audit hook; no private file
-    system.
+``chroot`` (Linux, grader running as root, no user namespaces: Docker's default seccomp
+    profile, Gradescope, Ubuntu 24.04's AppArmor rule)
+    The kernel is the boundary here too, with the privileges a stock container's root has
+    (:mod:`autograder.enter_jail`): the child enters the runtime's ``jail/`` with
+    ``chroot`` (no ``/proc``, no ``/dev/shm``, no host path), becomes a user id of its own
+    (:mod:`autograder.jail`: leased per submission, never shared), sets ``no_new_privs``
+    and the same seccomp filter, which here also keeps every signal to its own process.
+    Its one writable place is its own folder, watched to ``Limits.disk_mb``; every process
+    of its user is killed after each child.
 ``plain`` (any other POSIX system)
     the grader's own interpreter as the grader's own user, with the limits below and the
     audit hook.
@@ -64,7 +68,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from . import runtime, seccomp
+from . import jail, runtime, seccomp
 from .protocol import (
     MAX_FRAME,
     ProtocolError,
@@ -76,10 +80,9 @@ from .protocol import (
     write_frame,
 )
 
-RUNTIME = (Path(__file__).with_name("child.py"), Path(__file__).with_name("protocol.py"))
 FATAL = ("timeout", "crash", "garbage")
 INSIDE = "/sandbox"  # where the runtime, the child's files and the working directory appear
-SANDBOX_UID = 65534  # the unprivileged user a root grader runs submissions as ("nobody")
+SANDBOX_UID = 65534  # the user bwrap runs as for a root grader, and the child inside it
 
 
 class Isolation(str, enum.Enum):
@@ -87,7 +90,7 @@ class Isolation(str, enum.Enum):
     names (``Isolation.PLAIN == "plain"``) and are ordered strongest first."""
 
     BUBBLEWRAP = "bubblewrap"
-    UNPRIVILEGED = "unprivileged"
+    CHROOT = "chroot"
     PLAIN = "plain"
     PORTABLE = "portable"
 
@@ -108,7 +111,7 @@ class Isolation(str, enum.Enum):
     @property
     def staged(self) -> bool:
         """The child runs the minimal runtime of :mod:`autograder.runtime`."""
-        return self in (Isolation.BUBBLEWRAP, Isolation.UNPRIVILEGED)
+        return self in (Isolation.BUBBLEWRAP, Isolation.CHROOT)
 
     @property
     def note(self) -> str:
@@ -117,16 +120,16 @@ class Isolation(str, enum.Enum):
 
 
 LEVELS = tuple(level.value for level in Isolation)
-# RLIMIT_NPROC of the child: threads (bubblewrap refuses new processes; its count is per user
-# namespace) or, run as the sandbox user without namespaces, that user's threads and
-# processes together, so a submission there holds at most TASKS x memory_mb.
-TASKS = {Isolation.BUBBLEWRAP: 32, Isolation.UNPRIVILEGED: 4}
+# The weakest level a class is graded at unless the instructor lowers it by name: a kernel
+# boundary that a stock Docker container's root can have (docs/sandbox.md).
+FLOOR = Isolation.CHROOT
+# RLIMIT_NPROC of the child: its threads (both levels refuse new processes; the count is per
+# user namespace with bubblewrap, per leased user at the chroot level).
+TASKS = {Isolation.BUBBLEWRAP: 32, Isolation.CHROOT: 32}
 # Keyed by the levels, looked up by them or by their names (a Result holds the name).
 ISOLATION_NOTES: dict[str, str] = {
     Isolation.BUBBLEWRAP: "",
-    Isolation.UNPRIVILEGED: "(No private file system in this run: the sandbox runs your code "
-                            "as an unprivileged user with time, memory and file limits, and "
-                            "its audit hook keeps other files out of reach.)",
+    Isolation.CHROOT: "",
     Isolation.PLAIN: "(No Linux namespaces here: the sandbox still limits time, memory, files "
                      "and imports, with its audit hook alone.)",
     Isolation.PORTABLE: "(Weaker isolation on this system: the sandbox's audit hook alone keeps "
@@ -190,7 +193,7 @@ def probe() -> Probe:
     why = ""
     candidates = [Isolation.PLAIN]
     if sys.platform == "linux":
-        candidates[:0] = [Isolation.BUBBLEWRAP] + ([Isolation.UNPRIVILEGED]
+        candidates[:0] = [Isolation.BUBBLEWRAP] + ([Isolation.CHROOT]
                                                      if os.geteuid() == 0 else [])
     for level in candidates:
         missing = _missing_for(level)
@@ -201,16 +204,17 @@ def probe() -> Probe:
             started = box.start()
             if started.status == "ok":
                 return Probe(level, why)
+            # what the sandbox itself printed (bwrap's reason) says more than the exit status
             why = why or f"the {level} sandbox did not start here: " + (
-                started.message or box.output(300).strip() or started.status)
+                box.output(300).strip() or started.message or started.status)
     return Probe(Isolation.PLAIN, why)
 
 
 def _missing_for(level: Isolation) -> str:
     """What this machine lacks for ``level`` (the package to install), or ""."""
-    if level is not Isolation.BUBBLEWRAP:
+    if not level.staged:
         return ""
-    if not shutil.which("bwrap"):
+    if level is Isolation.BUBBLEWRAP and not shutil.which("bwrap"):
         return "bubblewrap is not installed (Debian/Ubuntu: apt-get install bubblewrap)"
     if not seccomp.available():
         return "libseccomp is not installed (Debian/Ubuntu: apt-get install libseccomp2)"
@@ -230,25 +234,54 @@ def posix_controls() -> bool:
         hasattr(os, f) for f in ("killpg", "waitid", "wait4"))
 
 
-def level_for(requested: str | None) -> Isolation:
+def level_for(requested: str | None, floor: str | None = None) -> Isolation:
     """``requested`` if this machine offers it (it or a stronger level), else ValueError;
-    None: the strongest, :func:`isolation`."""
-    best = isolation()
-    if requested is None:
-        return best
-    if requested not in LEVELS:
-        raise ValueError(f"isolation: {requested!r} is not one of {', '.join(LEVELS)}")
-    level = Isolation(requested)
+    None: the strongest, :func:`isolation`. With ``floor`` (a level's name: grading a
+    class), a level weaker than it is refused with a ValueError that says what is missing
+    and how to get it, never used in silence."""
+    for name, value in (("isolation", requested), ("min-isolation", floor)):
+        if value is not None and value not in LEVELS:
+            raise ValueError(f"{name}: {value!r} is not one of {', '.join(LEVELS)}")
+    best = Isolation(isolation())
+    level = best if requested is None else Isolation(requested)
     if level.rank < best.rank:
         raise ValueError(f"isolation: {requested!r} is not available on this machine (the "
                          f"strongest here is {best!r}: {probe().why_not_stronger})")
+    if floor is not None and level.rank > Isolation(floor).rank:
+        raise ValueError(below_floor(level, Isolation(floor)))
     return level
+
+
+def below_floor(level: Isolation, floor: Isolation) -> str:
+    """Why grading at ``level`` is refused, what would give this machine ``floor``, and how
+    to grade at ``level`` anyway."""
+    best = Isolation(isolation())
+    if level is not best:
+        why = f"--isolation {level} asked for it"
+        fix = f"leave out --isolation (this machine reaches {best})"
+    else:
+        why = probe().why_not_stronger or f"{level} is the strongest level here"
+        fix = _how_to_reach(floor)
+    return (f"refusing to grade at isolation {level}, below the floor {floor}: {why}. To fix "
+            f"it, {fix}. To grade anyway with {level}'s weaker boundary, lower the floor by "
+            f"name: --min-isolation {level}")
+
+
+def _how_to_reach(floor: Isolation) -> str:
+    """What gives this machine ``floor`` or a stronger level."""
+    if sys.platform != "linux":
+        return f"grade on Linux ({floor} needs it; a container run as root will do)"
+    if os.geteuid() != 0:
+        return ("install bubblewrap and libseccomp2 and allow user namespaces, or run the "
+                "grader as root in a container (its chroot level needs no more than Docker "
+                "gives)")
+    return "install libseccomp2 (and bubblewrap)"
 
 
 def weaker_warning(level: Isolation) -> str | None:
     """What ``grade`` warns when ``level`` is not the strongest level there is, with what
     would give this machine a stronger one."""
-    if level is Isolation.BUBBLEWRAP:
+    if level.rank <= FLOOR.rank:
         return None
     best = probe()
     text = f"warning: isolation is weaker on this machine ({level}): {level.note.strip('()')}"
@@ -333,31 +366,70 @@ class Sandbox:
         self.deadline = time.monotonic() + limits.budget
         self.source = source
         # the real, long path (no symbolic link, no Windows ~1 name): what the child's hook sees
-        self.root = Path(os.path.realpath(tempfile.mkdtemp(prefix="autograder-")))
-        self.runtime = self.root / "runtime"
-        self.runtime.mkdir()
-        for f in RUNTIME:
-            shutil.copy(f, self.runtime / f.name)
-        self.work = self.root / "work"
-        if self.level is not Isolation.BUBBLEWRAP:  # bubblewrap's work folder is a tmpfs
-            self.work.mkdir()
-            (self.work / "submission.py").write_text(source, encoding="utf-8")
-            if self.level is Isolation.UNPRIVILEGED:  # the sandbox user's, and only its
-                os.chmod(self.root, 0o711)
-                os.chmod(self.runtime, 0o755)
-                os.chown(self.work, SANDBOX_UID, SANDBOX_UID)
-                os.chmod(self.work, 0o700)
+        self.root = Path(os.path.realpath(tempfile.mkdtemp(prefix="sandbox-",
+                                                           dir=runtime.workspace())))
+        self.stdout = self.root / "stdout.txt"
         self.proc: subprocess.Popen[bytes] | None = None
         self.missing: list[str] = []
         self.load_error: dict[str, Any] | None = None
-        self.stdout = self.root / "stdout.txt"
         self._replies: Replies | None = None
+        self._lease: jail.Lease | None = None
+        self._watch: jail.DiskWatch | None = None
+        self._spawned: subprocess.Popen[bytes] | None = None  # the last child started
+        self._starting = threading.Lock()  # a child starts, or the disk watch empties its folder
+        self.work = self.root / "work"
+        try:
+            if self.level is Isolation.CHROOT:
+                self._lease = jail.Lease()
+                self.work = runtime.staged().work / self.root.name
+            if self.level is not Isolation.BUBBLEWRAP:
+                self._make_work()
+        except BaseException:
+            self.__exit__()
+            raise
+
+    def _make_work(self) -> None:
+        """The child's working folder, holding the submission (bubblewrap's is a tmpfs made
+        inside the sandbox)."""
+        work = self.work
+        if self._lease is not None:  # the leased user's alone
+            work.mkdir(mode=0o700)
+            os.chown(work, self._lease.uid, self._lease.uid)
+        else:
+            runtime_dir = self.root / "runtime"
+            runtime_dir.mkdir()
+            # explicit modes: the grader's copy may be its owner's alone (setup.sh)
+            for f in runtime.CHILD_FILES:
+                (runtime_dir / f.name).write_bytes(f.read_bytes())
+                os.chmod(runtime_dir / f.name, 0o644)
+            work.mkdir()
+        (work / "submission.py").write_text(self.source, encoding="utf-8")
+
+    def _disk_full(self) -> None:
+        """The disk watch's call (on its thread): the child wrote past ``limits.disk_mb``;
+        stop it and give the next child the folder as it was."""
+        with self._starting:
+            proc = self._spawned
+            if proc is not None and proc.returncode is None:
+                try:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                except (ProcessLookupError, PermissionError):
+                    pass
+            assert self._lease is not None
+            jail.reap(self._lease.uid)
+            remove_tree(self.work)
+            self._make_work()
 
     def __enter__(self) -> Sandbox:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        if self._watch is not None:
+            self._watch.close()
         self.stop()
+        if self._lease is not None:
+            self._lease.release()  # after its processes are gone
+            remove_tree(self.work)
         remove_tree(self.root)
 
     # --- lifecycle ---------------------------------------------------------------------------
@@ -370,16 +442,14 @@ class Sandbox:
         level = self.level
         if level.staged:
             rt = runtime.staged()
-            inside = level is Isolation.BUBBLEWRAP
-            base = INSIDE if inside else str(self.root)
-            python = f"{INSIDE}/python/bin/python3" if inside else str(rt.python)
-            numpy_path = f"{INSIDE}/lib" if inside else str(rt.numpy_path)
-            stdlib = (f"{INSIDE}/python/lib/python{rt.version}" if inside else str(rt.stdlib))
+            base, python = INSIDE, f"{INSIDE}/python/bin/python3"
+            numpy_path, stdlib = f"{INSIDE}/lib", f"{INSIDE}/python/lib/python{rt.version}"
         else:
             base, python = str(self.root), os.path.realpath(sys.executable)
             numpy_path = str(Path(np.__file__).resolve().parent.parent)
             stdlib = ""
-        config.update(cwd=f"{base}/work", submission=f"{base}/work/submission.py",
+        work = f"{INSIDE}/work/{self.work.name}" if level is Isolation.CHROOT else f"{base}/work"
+        config.update(cwd=work, submission=f"{work}/submission.py",
                       protocol=f"{base}/runtime/protocol.py", numpy_path=numpy_path,
                       numpy_dirs=[f"{numpy_path}/numpy", f"{numpy_path}/numpy.libs"],
                       stdlib=stdlib)
@@ -393,23 +463,28 @@ class Sandbox:
                f"--cpu={limits['cpu_seconds']}:{limits['cpu_seconds'] + 1}",
                f"--fsize={limits['file_mb'] << 20}", "--core=0", "--nofile=64",
                f"--nproc={limits['tasks']}", "--"] if prlimit and limits else []
+        if level is Isolation.CHROOT:
+            assert self._lease is not None
+            return [*cap, *jail.launcher("run", str(self._lease.uid), str(rt.jail), work,
+                                         "--", *cmd)], []
         if level is not Isolation.BUBBLEWRAP:
             return [*cap, *cmd], []
         fds = [_memfd(seccomp.program()), _memfd(self.source.encode("utf-8"))]
-        fds += [_memfd(f.read_bytes()) for f in RUNTIME]
+        fds += [_memfd(f.read_bytes()) for f in runtime.CHILD_FILES]
         uid = str(SANDBOX_UID)
         return [*cap, "bwrap", "--unshare-all", "--unshare-user", "--disable-userns",
                 "--die-with-parent", "--new-session", "--uid", uid, "--gid", uid,
                 "--hostname", "sandbox",
                 "--ro-bind", rt.loader, rt.loader,
-                "--ro-bind", str(rt.root / "python"), f"{INSIDE}/python",
-                "--ro-bind", str(rt.root / "lib"), f"{INSIDE}/lib",
-                "--ro-bind-data", str(fds[2]), f"{INSIDE}/runtime/{RUNTIME[0].name}",
-                "--ro-bind-data", str(fds[3]), f"{INSIDE}/runtime/{RUNTIME[1].name}",
+                "--ro-bind", str(rt.python_home), f"{INSIDE}/python",
+                "--ro-bind", str(rt.numpy_path), f"{INSIDE}/lib",
+                "--ro-bind-data", str(fds[2]), f"{INSIDE}/runtime/child.py",
+                "--ro-bind-data", str(fds[3]), f"{INSIDE}/runtime/protocol.py",
                 "--size", str(self.limits.disk_mb << 20), "--tmpfs", f"{INSIDE}/work",
                 "--file", str(fds[1]), f"{INSIDE}/work/submission.py",
-                "--dev", "/dev", "--remount-ro", "/", "--seccomp", str(fds[0]),
-                "--chdir", f"{INSIDE}/work", "--", *cmd], fds
+                # /dev's own tmpfs (its shm/) would be writable past the disk limit
+                "--dev", "/dev", "--remount-ro", "/dev", "--remount-ro", "/",
+                "--seccomp", str(fds[0]), "--chdir", f"{INSIDE}/work", "--", *cmd], fds
 
     def start(self) -> Outcome:
         """Start a child and wait until the submission is loaded (status ``ok`` if it is)."""
@@ -453,17 +528,21 @@ class Sandbox:
         """Start the child's process as :meth:`_command` says, as :data:`SANDBOX_UID` when the
         grader is root (a submission never runs as root), with a pipe for its input."""
         cmd, fds = self._command(config, program)
-        if self.level.staged and os.geteuid() == 0:
+        if self.level is Isolation.BUBBLEWRAP and os.geteuid() == 0:
             popen.update(user=SANDBOX_UID, group=SANDBOX_UID, extra_groups=[])
         env = _environment(config["cwd"])
         if self.level.staged:
-            env["LD_LIBRARY_PATH"] = (f"{INSIDE}/python/lib" if self.level is Isolation.BUBBLEWRAP
-                                      else str(runtime.staged().libs))
+            env["LD_LIBRARY_PATH"] = f"{INSIDE}/python/lib"
+        if self.level is Isolation.CHROOT and self._watch is None:
+            self._watch = jail.DiskWatch(self.work, self.limits.disk_mb << 20, self._disk_full)
         try:
-            return subprocess.Popen(
-                cmd, cwd=self.root, env=env, stdin=subprocess.PIPE, bufsize=0,
-                start_new_session=self.level.posix, pass_fds=fds,
-                creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0), **popen)  # no console
+            with self._starting:
+                self._spawned = subprocess.Popen(
+                    cmd, cwd=self.root, env=env, stdin=subprocess.PIPE, bufsize=0,
+                    start_new_session=self.level.posix, pass_fds=fds,
+                    creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0),  # no console
+                    **popen)
+                return self._spawned
         finally:
             for fd in fds:
                 os.close(fd)
@@ -622,6 +701,10 @@ class Sandbox:
         if status == "crash":
             code, cpu = self._reap(1.0)
         self.stop()
+        if status == "crash" and self._watch is not None and self._watch.exceeded:
+            self._watch.exceeded = False
+            return Outcome("crash", message=f"{what} wrote more than the {self.limits.disk_mb} "
+                                            "MB of files a submission may write; it was stopped")
         if status == "crash":
             return Outcome("crash", message=_crash_message(code, cpu, what, self.cpu_seconds,
                                                            self.memory_mb))

@@ -1,9 +1,11 @@
-"""The system calls a submission may not make, as a seccomp filter for bubblewrap.
+"""The system calls a submission may not make, as a seccomp filter.
 
 The filter is compiled by libseccomp (Debian's ``libseccomp2``, which apt itself depends on),
 loaded here through ``ctypes`` in the grader (never in the sandbox), and exported as the
 classic BPF program that ``bwrap --seccomp FD`` installs in the child just before the
-interpreter starts. The child and anything it could start inherit it; nothing can remove it.
+interpreter starts; at the ``chroot`` level :mod:`autograder.enter_jail` compiles it for the
+child's own process id and installs it with ``prctl``. The child and anything it could
+start inherit it; nothing can remove it.
 
 What it refuses (``EPERM``; ``ENOSYS`` for ``clone3``, so the C library falls back to
 ``clone``, whose flags a filter can read):
@@ -16,7 +18,12 @@ What it refuses (``EPERM``; ``ENOSYS`` for ``clone3``, so the C library falls ba
   ``writev``, ``kcmp``, ``pidfd_getfd``, ``bpf``, ``perf_event_open``, ``keyctl`` and the
   key syscalls, ``userfaultfd``, ``io_uring``, module loading, ``kexec``, ``reboot``, swap,
   clocks, ``open_by_handle_at`` and the like;
-* the network: ``socket`` and ``socketpair`` for any family but ``AF_UNIX``.
+* the network: ``socket`` and ``socketpair`` for any family but ``AF_UNIX``;
+* leaving its session or process group (``setsid``, ``setpgid``) and reaching a process
+  through a descriptor (``pidfd_open``, ``pidfd_send_signal``);
+* with ``own_pid`` (the ``chroot`` level, where no PID namespace hides the others): any
+  signal to another process (``kill``, ``tgkill``, ``rt_sigqueueinfo``,
+  ``rt_tgsigqueueinfo`` to a process id other than its own, ``tkill`` at all).
 
 A system call unknown to this machine's architecture is skipped; a call from another
 architecture (x32 on x86-64, say) kills the process (libseccomp's default for foreign
@@ -45,7 +52,11 @@ REFUSED = (
     "settimeofday", "clock_settime", "clock_adjtime", "adjtimex", "iopl", "ioperm",
     "modify_ldt", "uselib", "personality", "open_by_handle_at", "name_to_handle_at",
     "lookup_dcookie", "fanotify_init", "nfsservctl",
+    "setsid", "setpgid", "pidfd_open", "pidfd_send_signal",
 )
+# Signals that name their target by process id (argument 0), refused for any id but the
+# child's own when it is given; tkill names a thread of any process, so it is refused.
+SIGNALLING = ("kill", "tgkill", "rt_sigqueueinfo", "rt_tgsigqueueinfo")
 SCMP_ACT_ALLOW = 0x7FFF0000
 SCMP_CMP_NE, SCMP_CMP_MASKED_EQ = 1, 7
 
@@ -82,8 +93,9 @@ def available() -> bool:
 
 
 @cache
-def program() -> bytes:
-    """The filter as a BPF program (``struct sock_filter`` array), built once.
+def program(own_pid: int | None = None) -> bytes:
+    """The filter as a BPF program (``struct sock_filter`` array), built once; with
+    ``own_pid``, signals may reach that process only.
 
     Raises OSError when libseccomp is missing or refuses a rule.
     """
@@ -109,6 +121,10 @@ def program() -> bytes:
         rule(_errno(errno.EPERM), "clone", _ArgCmp(0, SCMP_CMP_MASKED_EQ, CLONE_THREAD, 0))
         for name in ("socket", "socketpair"):
             rule(_errno(errno.EPERM), name, _ArgCmp(0, SCMP_CMP_NE, socket.AF_UNIX, 0))
+        if own_pid is not None:
+            rule(_errno(errno.EPERM), "tkill")
+            for name in SIGNALLING:
+                rule(_errno(errno.EPERM), name, _ArgCmp(0, SCMP_CMP_NE, own_pid, 0))
         fd = os.memfd_create("seccomp")  # a file, not a pipe: the export never blocks
         try:
             rc = lib.seccomp_export_bpf(ctx, fd)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import errno
 import json
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -15,46 +16,101 @@ from pathlib import Path
 import pytest
 from test_autograder_fixtures import REPO
 
-from autograder import seccomp
+from autograder import jail, seccomp
 from autograder.sandbox import INSIDE, SANDBOX_UID, Limits, Sandbox, isolation, remove_tree
 
-BUBBLEWRAP = pytest.mark.skipif(isolation() != "bubblewrap",
-                                reason="no bubblewrap sandbox on this machine")
 ATTACK = Path(__file__).parent / "attacks" / "raw_escape.py"
+SLEEPER = "import time\ntime.sleep(60)\n"
+KERNEL_LEVELS = ["bubblewrap", "chroot"]
+OVERSHOOT_MB = 64  # the most the chroot level's disk watch may let through (measured: < 32)
+RAW_LIMITS = {"memory_mb": 512, "cpu_seconds": 30, "file_mb": 8, "tasks": 32}
 
 
-@BUBBLEWRAP
-def test_with_the_hook_defeated_the_kernel_gives_nothing(tmp_path):
-    """The escapes of the security review, run as plain Python with no audit hook: no host
-    file, no chroot escape, no process, no signal to the grader, the disk and memory limits
-    hold, and no module that runs native code or another program exists."""
+def needs(level: str) -> None:
+    """Skip unless this machine gives ``level``."""
+    if level == "bubblewrap" and isolation() != "bubblewrap":
+        pytest.skip("no bubblewrap sandbox on this machine")
+    if level == "chroot" and (os.geteuid() != 0 or not seccomp.available()):
+        pytest.skip("the chroot level needs a root grader and libseccomp")
+
+
+def raw(box: Sandbox, args: list[str]) -> subprocess.Popen[bytes]:
+    """The submission's file run as the program, in the child's place: no audit hook."""
+    config = {"cwd": f"{INSIDE}/work", "limits": RAW_LIMITS}
+    return box.spawn(config, ["-I", "-S", "submission.py", *args], stdout=subprocess.PIPE,
+                     stderr=subprocess.PIPE)
+
+
+def processes_of(uid: int) -> list[int]:
+    """The processes the user ``uid`` runs now."""
+    found = []
+    for entry in os.scandir("/proc"):
+        if entry.name.isdigit():
+            try:
+                if entry.stat().st_uid == uid:
+                    found.append(int(entry.name))
+            except OSError:
+                pass
+    return found
+
+
+@pytest.mark.parametrize("level", KERNEL_LEVELS)
+def test_with_the_hook_defeated_the_kernel_gives_nothing(tmp_path, level):
+    """The escapes of the security review, run as plain Python with no audit hook while a
+    classmate's submission runs beside it: no host file, no chroot escape, no process, no
+    signal or pidfd to the grader or the classmate, no other folder, no writable place but
+    its own, the disk and memory limits hold, no native module, and nothing left running."""
+    needs(level)
     secret = tmp_path / "grades.csv"
     secret.write_text("alice,24\n")
     targets = [str(REPO / "tests/fixtures/a1/reference.py"), "/etc/shadow", "/etc/passwd",
-               "/proc/1/cmdline", "/proc/self/status", str(secret), "/root/.bashrc",
-               sys.executable, "/usr/bin/python3"]
+               "/proc/1/cmdline", f"/proc/{os.getpid()}/cmdline", "/proc/self/status",
+               str(secret), "/root/.bashrc", sys.executable, "/usr/bin/python3"]
     limits = Limits(memory_mb=512, disk_mb=8)
-    with Sandbox(ATTACK.read_text(), [], limits, frozenset(), level="bubblewrap") as box:
-        config = {"cwd": f"{INSIDE}/work", "limits": {"memory_mb": 512, "cpu_seconds": 30,
-                                                      "file_mb": 8, "tasks": 32}}
-        proc = box.spawn(config, ["-I", "-S", f"{INSIDE}/work/submission.py", str(os.getpid()),
-                                  *targets], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 0, err.decode()
-    reached = json.loads(out)
+    with Sandbox(SLEEPER, [], limits, frozenset(), level=level) as mate, \
+            Sandbox(ATTACK.read_text(), [], limits, frozenset(), level=level) as box:
+        classmate = raw(mate, [])
+        # where the classmate's folder is as this sandbox could name it: at bubblewrap a
+        # tmpfs of another mount namespace, so its host path
+        mate_work = (f"{INSIDE}/work/{mate.work.name}" if level == "chroot"
+                     else str(mate.root / "work"))
+        proc = raw(box, [str(os.getpid()), str(classmate.pid), mate_work, *targets])
+        out, err = proc.communicate(timeout=120)
+        assert classmate.poll() is None, "the classmate was killed"
+        leased = box._lease.uid if box._lease else None
+        if level == "bubblewrap":  # the raw child is not the box's to stop
+            os.killpg(classmate.pid, signal.SIGKILL)
+    classmate.wait(timeout=10)  # at the chroot level, ended with every process of its user
+    reached = json.loads(out.splitlines()[-1])
     assert reached["read"] == []
     assert reached["listed_root"] == ["dev", "lib64", "sandbox"]
-    assert reached["uid"] == [SANDBOX_UID, SANDBOX_UID]
-    for attempt in ("chroot", "fork", "posix_spawn"):
+    assert reached["written_outside"] == [] and reached["classmate"] == []
+    assert reached["uid"][0] == reached["uid"][1] != 0
+    for attempt in ("chroot", "fork", "posix_spawn", "setsid", "setpgid", "pidfd_grader",
+                    "pidfd_classmate"):
         assert reached[attempt] == "refused: Operation not permitted", attempt
-    assert reached["setuid0"] == "refused: Invalid argument"  # no uid 0 in its namespace
-    assert reached["signal_grader"] == "refused: No such process"  # not even visible
     assert reached["exec_shell"] == "refused: No such file or directory"
-    assert reached["disk_full"] == "No space left on device"
-    assert reached["disk_written_mb"] <= limits.disk_mb
+    assert reached["proc"] == "refused: No such file or directory"
     assert reached["memory_mb"] <= limits.memory_mb
-    assert reached["threads"] < 32  # RLIMIT_NPROC in its own user namespace
+    assert reached["threads"] < 32  # RLIMIT_NPROC: its own user's (namespace's) tasks
     assert "native_modules" not in reached
+    if level == "bubblewrap":
+        assert reached["uid"] == [SANDBOX_UID, SANDBOX_UID]
+        assert reached["setuid0"] == "refused: Invalid argument"  # no uid 0 in its namespace
+        assert reached["signal_grader"] == "refused: No such process"  # not even visible
+        assert reached["disk_full"] == "No space left on device"
+        assert reached["disk_written_mb"] <= limits.disk_mb
+    else:
+        assert reached["uid"][0] == leased and leased in jail.uid_range()
+        assert reached["setuid0"] == "refused: Operation not permitted"
+        for attempt in ("signal_grader", "signal_classmate", "signal_everyone"):
+            assert reached[attempt] == "refused: Operation not permitted", attempt
+        # no tmpfs without mounts: the disk watch stopped it, within milliseconds of its
+        # limit (writing at memory speed, that is some MiB past it; docs/sandbox.md)
+        assert "disk_full" not in reached and proc.returncode == -signal.SIGKILL
+        assert limits.disk_mb <= reached["disk_written_mb"] <= limits.disk_mb + OVERSHOOT_MB
+        assert processes_of(leased) == []
+        assert not mate.work.exists() and not box.work.exists()
 
 
 FILTERED = ["fork", "vfork", "mount", "umount2", "chroot", "pivot_root", "unshare", "setns",

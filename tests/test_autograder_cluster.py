@@ -202,7 +202,7 @@ def test_refuse_weak_names_every_weak_worker():
     with pytest.raises(ValueError, match=r"2 of 3 workers are weaker \(tcp://b:2 reaches only "
                                          r"plain, tcp://c:3 reaches only portable\)"):
         refuse_weak({"tcp://a:1": "bubblewrap", "tcp://b:2": "plain", "tcp://c:3": "portable"},
-                    "unprivileged")
+                    "chroot")
 
 
 def test_without_a_scheduler_dask_is_never_imported(tmp_path):
@@ -222,7 +222,8 @@ def test_the_command_line_refuses_flags_that_do_not_go_together(capsys, tmp_path
     from autograder.cli import main
 
     for argv, phrase in [(["--scheduler", "local:1", "--isolation", "plain"], "--isolation"),
-                         (["--min-isolation", "plain"], "--min-isolation: only with")]:
+                         (["--isolation", "plain"], "below the floor chroot: --isolation "
+                                                     "plain asked for it")]:
         with pytest.raises(SystemExit):
             main(["grade", "--assignment", "a1", str(FIXTURES), "--out", "x", *argv])
         assert phrase in capsys.readouterr().err

@@ -225,22 +225,22 @@ quat_from_axis_angle = matrix_from_quat = quat_from_matrix = matrix_from_euler =
 '''
 
 
-@pytest.mark.parametrize("isolation", ["bubblewrap", "unprivileged"])
+@pytest.mark.parametrize("isolation", ["bubblewrap", "chroot"])
 def test_a_seed_thief_reads_nothing_and_scores_nothing(roots, numpy_python, isolation):
     root = roots("a1")
     from autograder.sandbox import isolation as strongest
 
     if isolation == "bubblewrap" and strongest() != "bubblewrap":
         pytest.skip("no bubblewrap here")
-    if isolation == "unprivileged" and os.geteuid() != 0:
-        pytest.skip("the unprivileged level needs a root grader, as on Gradescope")
+    if isolation == "chroot" and os.geteuid() != 0:
+        pytest.skip("the chroot level needs a root grader, as on Gradescope")
     results, log = grade(root, numpy_python,
                          {"thief.py": SEED_THIEF.replace("@ROOT@", str(root))},
                          AUTOGRADER_ISOLATION=isolation)
     assert results["score"] == 0
     assert results["extra_data"]["isolation"] == isolation
     assert "stolen: " in json.dumps(results)  # it ran, and what it got was refusals
-    if isolation == "unprivileged" and os.geteuid() == 0:
+    if isolation == "chroot" and os.geteuid() == 0:
         # without the audit hook, the submission's user still cannot reach the bundle
         python = shutil.which("python3", path="/usr/bin:/bin")
         seed = root / "source" / "seed"
@@ -272,7 +272,7 @@ def test_raw_escape_attack_as_a_submission(roots, numpy_python):
     """The kernel-level attack script, aimed at the bundle's seed, as the file a student
     uploads: the audit hook stops it first, and it scores and reads nothing."""
     root = roots("a1")
-    aim = f"import sys\nsys.argv[1:] = ['1', {str(root / 'source' / 'seed')!r}]\n"
+    aim = f"import sys\nsys.argv[1:] = ['1', '1', '/', {str(root / 'source' / 'seed')!r}]\n"
     attack = aim + (REPO / "tests" / "attacks" / "raw_escape.py").read_text()
     results, _ = grade(root, numpy_python, {"a1_rotations.py": attack})
     assert results["score"] == 0

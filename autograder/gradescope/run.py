@@ -8,10 +8,12 @@ back ``results/results.json``. What is printed here goes to Gradescope's stdout 
 results mark as shown to instructors only.
 
 The sandbox runs at the strongest level the container allows (``$AUTOGRADER_ISOLATION`` may
-ask for a weaker one, as the tests do). Whatever happens, a results.json is written: a
-submission that cannot be graded gets one that says why (like any refused submission), and a
-fault of the grader gets one that tells the student to contact the instructor, with the
-traceback in the log.
+ask for a weaker one, as the tests do), and never below ``$AUTOGRADER_MIN_ISOLATION``
+(default :data:`~autograder.sandbox.FLOOR`, which a stock container run as root reaches): a
+container that cannot give it grades nothing, and its log says why. Whatever happens, a
+results.json is written: a submission that cannot be graded gets one that says why (like any
+refused submission), and a fault of the grader gets one that tells the student to contact the
+instructor, with the traceback in the log.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ from ..grading import JUNK, MAX_DEPTH, MAX_ENTRIES, SUFFIXES
 from ..records import not_run
 from ..report import create
 from ..runner import prepare, run
-from ..sandbox import level_for, weaker_warning
+from ..sandbox import FLOOR, Isolation, level_for, weaker_warning
 from ..spec import Assignment
 from ..submission import SubmissionError, printable, read_regular
 from .feedback import failure_json, results_json
@@ -72,7 +74,7 @@ def grade(root: Path) -> dict[str, Any]:
     seed = protected_seed(root)
     spec = load(settings["ASSIGNMENT"])
     metadata = read_metadata(root / "submission_metadata.json")
-    level = level_for(os.environ.get("AUTOGRADER_ISOLATION") or None)
+    level = container_level()
     print(f"assignment {spec.key}; isolation {level}; submission "
           f"{metadata.get('id', '(no metadata)')} by {_users(metadata)}", flush=True)
     warning = weaker_warning(level)
@@ -92,6 +94,13 @@ def grade(root: Path) -> dict[str, Any]:
         raise RuntimeError("results.json does not follow Gradescope's format: "
                            + "; ".join(wrong))
     return results
+
+
+def container_level() -> Isolation:
+    """The level to grade at here (``$AUTOGRADER_ISOLATION``, else the strongest); a
+    ValueError below ``$AUTOGRADER_MIN_ISOLATION`` (else :data:`FLOOR`)."""
+    return level_for(os.environ.get("AUTOGRADER_ISOLATION") or None,
+                     os.environ.get("AUTOGRADER_MIN_ISOLATION") or FLOOR.value)
 
 
 def protected_seed(root: Path) -> str:
@@ -203,7 +212,10 @@ def check_install() -> None:
                          f"{settings['NUMPY_VERSION']}")
     spec = load(settings["ASSIGNMENT"])
     tests = prepare(spec, "setup check")
-    level = level_for(None)
+    try:
+        level = container_level()
+    except ValueError as exc:
+        raise SystemExit(f"setup: {exc}") from None
     print(f"setup: Python {here}, numpy {version('numpy')}, {spec.key} ({len(tests)} tests "
           f"with the hidden ones), sandbox isolation here: {level}")
     warning = weaker_warning(level)

@@ -1,14 +1,25 @@
 # ruff: noqa  (an attack run with no audit hook at all, as plain code in the sandbox)
 """Everything a submission that defeated the audit hook (numpy's ``__array_interface__``
-writes any address) would try next, by the kernel's own calls. Prints what it reached as
-JSON: every entry should be empty or refused."""
+writes any address) would try next, by the kernel's own calls. Arguments: the grader's
+process id, a classmate's (running beside it), the classmate's working folder as this
+sandbox would name it, then files to read. Prints what it reached as JSON after each step
+(the last line is the whole record; the last step, filling the disk, may end it): every
+entry should be empty or refused."""
 import json
 import os
+import signal
 import sys
 import threading
 
-grader_pid, paths = int(sys.argv[1]), sys.argv[2:]
+grader_pid, classmate_pid, classmate_work = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
+paths = sys.argv[4:]
 reached = {"read": [], "listed_root": sorted(os.listdir("/")), "uid": [os.getuid(), os.getgid()]}
+
+
+def report():
+    print(json.dumps(reached), flush=True)
+
+
 for p in paths:
     try:
         with open(p, "rb") as f:
@@ -33,23 +44,47 @@ def chroot_escape():
     return os.listdir("/")
 
 
+def write_outside():
+    made = []
+    for folder in ("/", "/sandbox", "/sandbox/python", "/sandbox/lib", "/dev", "/dev/shm",
+                   "/tmp", os.path.dirname(os.getcwd())):
+        try:
+            with open(os.path.join(folder, "planted"), "wb") as f:
+                f.write(b"x" * 4096)
+            made.append(folder)
+        except OSError:
+            pass
+    return made
+
+
+def reach_classmate():
+    found = []
+    for look in (lambda: os.listdir(classmate_work), lambda: os.listdir(os.path.dirname(classmate_work)),
+                 lambda: open(os.path.join(classmate_work, "submission.py")).read(40)):
+        try:
+            found.append(look())
+        except OSError:
+            pass
+    return found
+
+
 attempt("chroot", chroot_escape)
 attempt("setuid0", lambda: os.setuid(0))
 attempt("fork", os.fork)
 attempt("posix_spawn", lambda: os.posix_spawn(sys.executable, [sys.executable, "-c", "0"],
                                               os.environ))
+attempt("setsid", os.setsid)
+attempt("setpgid", lambda: os.setpgid(0, 0))
 attempt("signal_grader", lambda: os.kill(grader_pid, 0))
+attempt("signal_classmate", lambda: os.kill(classmate_pid, signal.SIGKILL))
+attempt("signal_everyone", lambda: os.kill(-1, signal.SIGKILL))  # every process it may reach
+attempt("pidfd_grader", lambda: os.pidfd_open(grader_pid))
+attempt("pidfd_classmate", lambda: os.pidfd_open(classmate_pid))
+attempt("proc", lambda: os.listdir("/proc"))
 attempt("exec_shell", lambda: os.execv("/bin/sh", ["sh", "-c", "id"]))
-written = 0
-try:
-    with open("fill", "wb") as f:
-        while written < 1 << 30:
-            f.write(b"x" * (1 << 20))
-            f.flush()
-            written += 1 << 20
-except OSError as exc:
-    reached["disk_full"] = exc.strerror
-reached["disk_written_mb"] = written >> 20
+reached["written_outside"] = write_outside()
+reached["classmate"] = reach_classmate()
+report()
 blocks = []
 try:
     while len(blocks) < 64:
@@ -73,6 +108,17 @@ for name in ("_socket", "_posixsubprocess", "_ctypes", "_tkinter", "_xxsubinterp
         reached.setdefault("native_modules", []).append(name)
     except ImportError:
         pass
-print(json.dumps(reached))
+report()
+written = 0
+try:  # many files of 1 MiB: no one file reaches a per-file limit
+    while written < 1 << 30:
+        with open(f"fill{written >> 20}", "wb") as f:
+            f.write(b"x" * (1 << 20))
+        written += 1 << 20
+        reached["disk_written_mb"] = written >> 20
+        report()
+except OSError as exc:
+    reached["disk_full"] = exc.strerror
+report()
 sys.stdout.flush()
 os._exit(0)
