@@ -32,6 +32,7 @@ from .runtime import workspace
 UIDS_ENV = "AUTOGRADER_UIDS"
 UIDS = range(61000, 62000)  # as isolate's 60000+ boxes: far from system and login users
 ENTER = Path(__file__).with_name("enter_jail.py")
+CLEAN = b"clean\n"  # a lease file's text once its user's processes were all ended
 MAX_ENTRIES = 4096  # files and folders a submission may make in its folder
 
 
@@ -70,13 +71,16 @@ class Lease:
                 os.close(fd)
                 continue
             self.uid, self._fd = uid, fd
-            reap(uid)  # what a grader that died with this lease left
+            if os.pread(fd, len(CLEAN), 0) != CLEAN:  # a grader died holding it: end its leftovers
+                reap(uid)
+            os.ftruncate(fd, 0)
             return
         raise OSError(f"every user id of {uid_range()} is leased or in use: set {UIDS_ENV} "
                       "to a larger free range")
 
     def release(self) -> None:
         reap(self.uid)
+        os.pwrite(self._fd, CLEAN, 0)  # so the next lease need not reap
         os.close(self._fd)
 
 

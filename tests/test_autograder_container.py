@@ -208,3 +208,39 @@ def test_the_bundle_as_shipped_grades_in_a_container(tmp_path, bundle):
         total = sum(t["max_score"] for t in results["tests"])
         assert results["score"] == (total if honest else 0), done.stdout
         assert SEED not in json.dumps(results) + done.stdout
+
+
+# those whose score a crash or a forged frame decides
+SAME_SCORE = ("reference", "adv_exits", "adv_memory_bomb",
+              "adv_garbage_bytes", "adv_huge_answer", "adv_wrong_types")
+
+
+def test_one_score_per_submission_on_every_path(tmp_path):
+    """The same files get the same scores on the local pool and on a cluster in the
+    container (chroot), and on this machine's own level, and each row says its level."""
+    folder = tmp_path / "class"
+    folder.mkdir()
+    fixtures = TESTS / "fixtures" / "a1"
+    for name in SAME_SCORE:
+        src = (fixtures / f"{name}.py").read_text().replace("@REPO@", str(REPO))
+        if src.startswith("# extends: reference.py"):
+            src = HONEST + "\n\n" + src
+        (folder / f"{name}.py").write_text(src)
+    seed = tmp_path / "seed"
+    seed.write_text(SEED)
+    grade = [sys.executable, "-m", "autograder", "grade", "--assignment", "a1", str(folder),
+             "--seed-file", str(seed)]
+    paths = {"here": ([*grade, "--jobs", "2", "--out", str(tmp_path / "here")], False),
+             "pool": ([*grade, "--jobs", "2", "--out", str(tmp_path / "pool")], True),
+             "cluster": ([*grade, "--scheduler", "local:2", "--out", str(tmp_path / "cluster")],
+                         True)}
+    scores = {}
+    for path, (command, contained) in paths.items():
+        done = (in_container(*command) if contained else
+                subprocess.run(command, cwd=REPO, capture_output=True, text=True, timeout=300))
+        assert done.returncode == 0, done.stderr
+        rows = list(csv.DictReader((tmp_path / path / "grades.csv").open()))
+        assert {r["isolation"] for r in rows} == {"chroot" if contained else isolation()}
+        scores[path] = {r["submission"]: float(r["score"]) for r in rows}
+    assert scores["here"] == scores["pool"] == scores["cluster"]
+    assert scores["here"]["reference"] == 24 and scores["here"]["adv_exits"] < 24
