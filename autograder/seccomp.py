@@ -18,7 +18,9 @@ What it refuses (``EPERM``; ``ENOSYS`` for ``clone3``, so the C library falls ba
   ``writev``, ``kcmp``, ``pidfd_getfd``, ``bpf``, ``perf_event_open``, ``keyctl`` and the
   key syscalls, ``userfaultfd``, ``io_uring``, module loading, ``kexec``, ``reboot``, swap,
   clocks, ``open_by_handle_at`` and the like;
-* the network: ``socket`` and ``socketpair`` for any family but ``AF_UNIX``;
+* the network: ``socket`` and ``socketpair`` for any family but ``AF_UNIX`` (with
+  ``own_pid``, where no network namespace hides the host's abstract unix sockets, no
+  ``socket`` at all);
 * leaving its session or process group (``setsid``, ``setpgid``) and reaching a process
   through a descriptor (``pidfd_open``, ``pidfd_send_signal``);
 * with ``own_pid`` (the ``chroot`` level, where no PID namespace hides the others): any
@@ -119,9 +121,11 @@ def program(own_pid: int | None = None) -> bytes:
             rule(_errno(errno.EPERM), name)
         rule(_errno(errno.ENOSYS), "clone3")
         rule(_errno(errno.EPERM), "clone", _ArgCmp(0, SCMP_CMP_MASKED_EQ, CLONE_THREAD, 0))
-        for name in ("socket", "socketpair"):
-            rule(_errno(errno.EPERM), name, _ArgCmp(0, SCMP_CMP_NE, socket.AF_UNIX, 0))
-        if own_pid is not None:
+        rule(_errno(errno.EPERM), "socketpair", _ArgCmp(0, SCMP_CMP_NE, socket.AF_UNIX, 0))
+        if own_pid is None:
+            rule(_errno(errno.EPERM), "socket", _ArgCmp(0, SCMP_CMP_NE, socket.AF_UNIX, 0))
+        else:  # the host's network namespace: even a unix socket could reach a host service
+            rule(_errno(errno.EPERM), "socket")
             rule(_errno(errno.EPERM), "tkill")
             for name in SIGNALLING:
                 rule(_errno(errno.EPERM), name, _ArgCmp(0, SCMP_CMP_NE, own_pid, 0))

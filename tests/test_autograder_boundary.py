@@ -116,22 +116,27 @@ def test_with_the_hook_defeated_the_kernel_gives_nothing(tmp_path, level):
 FILTERED = ["fork", "vfork", "mount", "umount2", "chroot", "pivot_root", "unshare", "setns",
             "ptrace", "process_vm_readv", "process_vm_writev", "bpf", "perf_event_open",
             "keyctl", "add_key", "userfaultfd", "io_uring_setup", "init_module", "kexec_load",
-            "open_by_handle_at", "fsopen", "move_mount"]
+            "open_by_handle_at", "fsopen", "move_mount", "setsid", "setpgid", "pidfd_open",
+            "pidfd_send_signal"]
 
 
 @pytest.mark.skipif(not seccomp.available() or sys.platform != "linux",
                     reason="no libseccomp on this machine")
-def test_the_seccomp_filter_refuses_every_listed_call_and_keeps_threads():
+@pytest.mark.parametrize("level", KERNEL_LEVELS)
+def test_the_seccomp_filter_refuses_every_listed_call_and_keeps_threads(level):
     """The filter installed in a throwaway process (native calls through ctypes, as an
     attacker with code execution would make them): every listed call is refused, sockets
-    too but AF_UNIX, a non-thread clone too, and clone3 says ENOSYS so threads still start."""
-    program = seccomp.program()
+    too but AF_UNIX, a non-thread clone too, and clone3 says ENOSYS so threads still start.
+    The chroot level's filter, built for the process's own id, also refuses every socket
+    and any signal but to itself."""
     probe = textwrap.dedent(f"""
-        import ctypes, json, os, socket, threading
+        import ctypes, json, os, signal, socket, threading
+        from autograder import seccomp
         libc = ctypes.CDLL(None, use_errno=True)
         lib = ctypes.CDLL("libseccomp.so.2")
         nr = lambda n: lib.seccomp_syscall_resolve_name(n.encode())
-        prog = bytes.fromhex({program.hex()!r})
+        me = os.getpid()
+        prog = seccomp.program(own_pid=me if {level == "chroot"} else None)
         class Fprog(ctypes.Structure):
             _fields_ = [("len", ctypes.c_ushort), ("filter", ctypes.c_char_p)]
         fprog = Fprog(len(prog) // 8, prog)
@@ -146,18 +151,31 @@ def test_the_seccomp_filter_refuses_every_listed_call_and_keeps_threads():
         found["clone3"] = errno_of(nr("clone3"), 0, 0)
         found["socket_inet"] = errno_of(nr("socket"), socket.AF_INET, socket.SOCK_STREAM, 0)
         found["socket_unix"] = errno_of(nr("socket"), socket.AF_UNIX, socket.SOCK_STREAM, 0)
+        pair = (ctypes.c_int * 2)()
+        found["socketpair_unix"] = errno_of(nr("socketpair"), socket.AF_UNIX,
+                                            socket.SOCK_STREAM, 0, ctypes.byref(pair))
+        found["kill_self"] = errno_of(nr("kill"), me, 0)
+        found["kill_parent"] = errno_of(nr("kill"), os.getppid(), 0)
+        found["kill_group"] = errno_of(nr("kill"), 0, 0)
+        found["tgkill_self"] = errno_of(nr("tgkill"), me, threading.get_native_id(), 0)
+        found["tkill"] = errno_of(nr("tkill"), threading.get_native_id(), 0)
         t = threading.Thread(target=lambda: None); t.start(); t.join()
         found["thread"] = "started"
         print(json.dumps(found))
     """)
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                         timeout=60)
+                         timeout=60, cwd=REPO)
     assert out.returncode == 0, out.stderr
     found = json.loads(out.stdout)
     for name in [*FILTERED, "clone", "socket_inet"]:
         assert found[name] == errno.EPERM, name
-    assert found["clone3"] == errno.ENOSYS
-    assert found["socket_unix"] == "allowed" and found["thread"] == "started"
+    assert found["clone3"] == errno.ENOSYS and found["thread"] == "started"
+    assert found["socketpair_unix"] == found["kill_self"] == found["tgkill_self"] == "allowed"
+    refused_here = ("socket_unix", "kill_parent", "kill_group", "tkill")
+    if level == "chroot":
+        assert all(found[n] == errno.EPERM for n in refused_here), found
+    else:
+        assert all(found[n] == "allowed" for n in refused_here), found
 
 
 def test_a_deep_tree_with_closed_folders_is_removed(tmp_path):

@@ -244,3 +244,20 @@ def test_one_score_per_submission_on_every_path(tmp_path):
         scores[path] = {r["submission"]: float(r["score"]) for r in rows}
     assert scores["here"] == scores["pool"] == scores["cluster"]
     assert scores["here"]["reference"] == 24 and scores["here"]["adv_exits"] < 24
+
+
+def test_a_private_tmpdir_does_not_weaken_the_grader(tmp_path):
+    """With TMPDIR a folder only root may enter (mktemp -d, PrivateTmp), the runtime used to
+    be staged where bubblewrap's user could not read it, and the grader fell to plain. Its
+    workspace is its own now: the strongest level still grades, to full marks."""
+    private = tmp_path / "private"
+    private.mkdir(mode=0o700)
+    (tmp_path / "ada.py").write_text(HONEST)
+    done = subprocess.run([sys.executable, "-m", "autograder", "grade", "--assignment", "a1",
+                           str(tmp_path / "ada.py"), "--out", str(tmp_path / "out")],
+                          cwd=REPO, capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "TMPDIR": str(private)})
+    assert done.returncode == 0, done.stderr
+    row = next(csv.DictReader((tmp_path / "out" / "grades.csv").open()))
+    assert row["isolation"] == isolation() and float(row["score"]) == 12
+    assert "warning" not in done.stderr.replace("warning: no --seed-file", "")
