@@ -431,7 +431,7 @@ class RestComparison(tuple[BoneComparison, ...]):
 
     def __str__(self) -> str:
         head = (f"{'bone (target)':<38} {'source joint':<18} {'dir source':>20} "
-                f"{'dir target':>20} {'angle':>7} {'len A':>6} {'len B':>6}")
+                f"{'dir target':>20} {'angle':>7} {'len source':>10} {'len target':>10}")
         lines = [head, "-" * len(head)]
         for b in self:
             # round(., 2) + 0.0: no "-0.00", the table prints the same on every machine
@@ -441,7 +441,7 @@ class RestComparison(tuple[BoneComparison, ...]):
                                                       b.direction_target))
             lines.append(
                 f"{b.parent + ' -> ' + b.joint:<38} {b.source_joint:<18} {ds:>20} {dt:>20} "
-                f"{b.angle_degrees:6.1f}° {b.length_source:6.2f} {b.length_target:6.2f}"
+                f"{b.angle_degrees:6.1f}° {b.length_source:10.2f} {b.length_target:10.2f}"
             )
         return "\n".join(lines)
 

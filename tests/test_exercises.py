@@ -203,17 +203,45 @@ def test_the_hint_button_reveals_a_hint_then_the_formula(monkeypatch):
     assert ex.formula in shown.value and button.disabled
 
 
-def test_the_quiz_reveals_its_answer_only_after_a_choice(monkeypatch):
+def _quiz_widget(monkeypatch, **kw):
     quizzes = importlib.import_module("course.exercises.quiz")  # the module, not the function
     monkeypatch.setattr(quizzes, "in_kernel", lambda: True)
-    _, choices, verdict = quizzes.quiz("05.first_sweep", "Which joint turns most?",
-                                       ["the root", "the tip"], answer=1,
-                                       why="It goes first.").children
-    assert verdict.value == ""
-    choices.value = 0
-    assert "Not this one" in verdict.value and "(b) the tip" in verdict.value
+    return quizzes.quiz("05.first_sweep", "Which joint turns most?", ["the root", "the tip"],
+                        answer=1, why="It goes first.", **kw).children
+
+
+def test_the_quiz_reveals_its_answer_only_after_a_choice(monkeypatch):
+    question, choices, show, verdict = _quiz_widget(monkeypatch)
+    assert verdict.value == "" and "It goes first." not in question.value
     choices.value = 1
     assert "Right" in verdict.value and "It goes first." in verdict.value
+    assert choices.disabled and show.disabled
+
+
+def test_a_wrong_first_choice_gets_a_hint_not_the_answer(monkeypatch):
+    _, choices, show, verdict = _quiz_widget(monkeypatch, hint="Count the lever arms.")
+    choices.value = 0
+    assert "try again" in verdict.value and "Count the lever arms." in verdict.value
+    assert "(b)" not in verdict.value and "It goes first." not in verdict.value
+    assert not choices.disabled
+    choices.value = 1  # the second try, right: the explanation
+    assert "Right" in verdict.value and "It goes first." in verdict.value
+
+
+def test_a_second_wrong_choice_reveals_the_answer(monkeypatch):
+    _, choices, _, verdict = _quiz_widget(monkeypatch)
+    choices.value = 0
+    choices.value = None  # (a reset, as the widget may send, counts as nothing)
+    assert "try again" in verdict.value
+    choices.value = 0
+    assert "(b) the tip" in verdict.value and "It goes first." in verdict.value
+
+
+def test_show_me_reveals_the_answer_without_a_choice(monkeypatch):
+    _, choices, show, verdict = _quiz_widget(monkeypatch)
+    show.click()
+    assert "(b) the tip" in verdict.value and "It goes first." in verdict.value
+    assert choices.disabled
 
 
 def test_importing_the_exercises_is_light():
@@ -276,3 +304,17 @@ def test_notebook_quizzes_run_headless(path, capsys):
     for source in quizzes:
         exec(source, {"quiz": quiz})
         assert "🤔" in capsys.readouterr().out
+    hidden = [c["metadata"].get("jupyter", {}).get("source_hidden", False) for c in cells
+              if c["cell_type"] == "code" and 'quiz("' in "".join(c["source"])]
+    assert all(hidden), f"{path.name}: a quiz cell shows its source (and its answer)"
+
+
+def test_the_uniform_catmull_rom_tangent_is_named_as_in_a5():
+    """Exercise 11.catmull_rom_tangent names (p₊ − p₋)/2 through the shared catalogue, in the
+    words a5 uses."""
+    from autograder.catalogue import UNIFORM_TANGENT
+
+    feedback = check("11.catmull_rom_tangent", lambda a, b, t0, t1, t2: (b - a) / 2)
+    assert feedback.status == "fail"
+    assert UNIFORM_TANGENT[0] in feedback.text
+    assert "divided by the time between the two neighbours" in feedback.text

@@ -168,6 +168,9 @@ def planted_foot_task(
 KNOT_COLORS = {"time": TARGET, "uniform": "#4a5561", "centripetal": GREEN}
 SCHEME_LINES = ("#4a5561", BONE, TARGET)  # linear + SLERP, cubic + SQUAD, Catmull-Rom + SQUAD
 KEY_DOT = "#f08c3a"
+# each scheme its own dash and marker too, later ones drawn thinner on top: two schemes with
+# nearly the same error (cubic and Catmull-Rom) stay visible as two lines, not one
+SCHEME_STYLES = (("o", "-", 2.2), ("s", "--", 1.6), ("^", ":", 1.4))
 
 
 def _key_lines(ax: Any, key_times: ArrayLike) -> None:
@@ -248,15 +251,19 @@ def keyframe_errors(ks: Sequence[int], errors: Mapping[str, Sequence[float]], ti
     key_times : the times of the keys at that spacing, marked on the time axis.
     """
     fig, (left, right) = panels(2, figsize=(11, 3.4))
-    for (name, e), color in zip(errors.items(), SCHEME_LINES, strict=False):
-        left.plot(ks, e, "o-", color=color, label=name)
+    styles = list(zip(SCHEME_LINES, SCHEME_STYLES, strict=True))
+    for z, ((name, e), (color, (marker, dash, lw))) in enumerate(zip(errors.items(), styles,
+                                                                      strict=False)):
+        left.plot(ks, e, marker=marker, ls=dash, lw=lw, color=color, label=name, zorder=2 + z,
+                  ms=7 - 1.5 * z, mfc="none" if z else color)
     left.set(xlabel="k (keep every k-th frame)", ylabel="mean joint error (cm)", xscale="log",
              yscale="log", title="Error vs key spacing")
     left.set_xticks(list(ks), labels=[str(k_) for k_ in ks])
     left.minorticks_off()
     left.legend(frameon=False)
-    for (name, err), color in zip(over_time.items(), SCHEME_LINES, strict=False):
-        right.plot(times, err, color=color, lw=1.2, label=name)
+    for z, ((name, err), (color, (_, dash, lw))) in enumerate(zip(over_time.items(), styles,
+                                                                   strict=False)):
+        right.plot(times, err, color=color, ls=dash, lw=lw * 0.7, label=name, zorder=2 + z)
     kt = np.asarray(key_times, dtype=np.float64)
     right.plot(kt, np.zeros(len(kt)), "|", ms=12, color=KEY_DOT, label="keys")
     right.legend(frameon=False, fontsize=8)
