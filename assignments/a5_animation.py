@@ -66,8 +66,8 @@ def squad(q_keys: np.ndarray, times: np.ndarray, t: np.ndarray) -> np.ndarray:
     keys): every turn between neighbours is then the short one. With
     :math:`\log q = \operatorname{atan2}(\lVert v\rVert, w)\,v/\lVert v\rVert` for
     :math:`q = (w, v)`, :math:`\exp v = (\cos\lVert v\rVert, \sin\lVert v\rVert\,v/\lVert v\rVert)`,
-    and :math:`\mathrm{slerp}(a, b, u) = a\exp(u\log(a^{-1}b))` (the shortest way: use
-    :math:`-b` when :math:`a\cdot b < 0`), the control of interior key :math:`i` is
+    and :math:`\mathrm{slerp}(a, b, u) = a\exp(u\log(a^{-1}b))`, the control of interior
+    key :math:`i` is
 
     .. math::
         s_i = q_i \exp\!\left(-\frac{h_{i-1}\log(q_i^{-1}q_{i+1}) + h_i\log(q_i^{-1}q_{i-1})}
@@ -79,6 +79,12 @@ def squad(q_keys: np.ndarray, times: np.ndarray, t: np.ndarray) -> np.ndarray:
     .. math::
         \mathrm{squad}(u) = \mathrm{slerp}\big(\mathrm{slerp}(q_i, q_{i+1}, u),\
         \mathrm{slerp}(s_i, s_{i+1}, u),\ 2u(1 - u)\big).
+
+    The keys are in one hemisphere, so :math:`\mathrm{slerp}(q_i, q_{i+1}, u)` is the short
+    way. Take the other two slerps **as they are** (:math:`a^{-1}b` with the signs the
+    controls and the outer terms have, no flip to :math:`-b`): the inner
+    :math:`\mathrm{slerp}(s_i, s_{i+1}, u)` must follow the arc the controls were built on,
+    or the curve jumps where the controls' signs happen to differ.
 
     Parameters
     ----------
@@ -126,13 +132,40 @@ def implicit_euler_step(x: np.ndarray, v: np.ndarray, masses: np.ndarray, spring
 
     at :math:`(i, i)` and :math:`(j, j)`, :math:`-H_s` at :math:`(i, j)` and :math:`(j, i)`.
     Keep the :math:`(1 - L/\lVert d\rVert)` term: it is negative for a compressed spring.
+    a5 wants this **true** Hessian, not the projected one of notebook 12 (each compressed
+    block's coefficient clamped at 0): the true Hessian gives Newton's fast (quadratic)
+    convergence near the answer, where :math:`\nabla^2 E` is positive definite; the projected
+    one converges only linearly there and may not reach the tolerance within the 50
+    iterations. Where the true Hessian is indefinite (compressed springs outweigh
+    :math:`M/h^2`) its Newton direction may go uphill: if
+    :math:`\nabla E\cdot\Delta z \ge 0`, use :math:`\Delta z = -\nabla E` instead.
     **Fixed** particles are not unknowns: drop their rows and columns and keep them where
-    they are. Line search: start with :math:`\alpha = 1` and halve it until
-    :math:`E(z + \alpha\Delta z) \le E(z) + 10^{-4}\alpha\,\nabla E\cdot\Delta z` (if
-    :math:`\nabla E\cdot\Delta z \ge 0`, use :math:`\Delta z = -\nabla E` instead). Stop when
-    :math:`\lVert\nabla E\rVert` (over the free particles) is below about :math:`10^{-9}`;
-    the grader accepts :math:`10^{-6}` times the system's force scale. Then
-    :math:`v^+ = (x^+ - x)/h`.
+    they are.
+
+    Line search (needed: from a start far from the answer, a big :math:`h`, the full
+    Newton step can overshoot and never settle): start with :math:`\alpha = 1` and halve it
+    until
+
+    .. math::
+        E(z + \alpha\Delta z) \le E(z) + 10^{-4}\alpha\,\nabla E\cdot\Delta z
+                                 + 10^{-14}\,\lvert E(z)\rvert ,
+
+    or until :math:`\alpha < 2^{-30}` (then take that step anyway). The
+    :math:`10^{-14}\lvert E\rvert` slack and the :math:`\alpha` floor matter: near the
+    minimum the decrease is smaller than the rounding in :math:`E`, and without them the
+    halving never ends.
+
+    Stop when :math:`\lVert\nabla E\rVert` (over the free particles) is at most
+    :math:`\tau = \max\big(10^{-9} f,\ 100\,\varepsilon\,s\,(\lVert m\rVert/h^2
+    + \lVert k\rVert)\big)`, where :math:`f = \max(\lVert m\rVert\,\lVert g\rVert,\
+    \lVert\nabla E(z_0)\rVert)` is the force scale (the free particles' weight, or the
+    first gradient), :math:`\varepsilon` = ``np.finfo(float).eps``, :math:`s` the largest
+    :math:`\lvert\cdot\rvert` of the entries of :math:`x` and :math:`y` and
+    :math:`\lVert m\rVert`, :math:`\lVert k\rVert` the norms of the free masses and the
+    stiffnesses (the second term is what rounding lets :math:`\lVert\nabla E\rVert` reach),
+    **or after 50 Newton iterations**, whichever comes first. The grader accepts any
+    :math:`x^+` with :math:`\lVert\nabla E\rVert \le 10^{-6}` times the force scale and
+    :math:`E(x^+)` no higher than at its own minimiser. Then :math:`v^+ = (x^+ - x)/h`.
 
     Parameters
     ----------

@@ -9,6 +9,10 @@ mistake known in one is recognised in all:
   scalar-last ``(x, y, z, w)``, the conjugate ``q*`` (the inverse rotation), the transposed
   matrix ``Rᵀ``; and on every angle a function is given (a parameter named ``angle``,
   ``angles`` or ``theta``): radians converted "from degrees" once more.
+* **tangents** — Catmull–Rom's tangent at a key written as the textbook's uniform
+  ``(p_{i+1} - p_{i-1})/2`` whatever the key times (right only one key per second): on a
+  function of the tangent itself (parameters ``p_prev, p_next, t_prev, t_i, t_next``, a
+  notebook's exercise) and on a spline through keys (``keys, times, t``).
 * **pivots** — a step that turns a sub-chain, ``p_k ← r_i + R(p_k − r_i)`` for the joints
   ``k`` beyond joint ``i``, turns it about the wrong point: the world origin, the end effector,
   or measured at the next joint. An assignment with such a step says how its function shows
@@ -41,6 +45,14 @@ TRANSPOSED = ("the transposed matrix (the inverse rotation)",
 DEGREES = ("degrees for radians",
            "The angles arrive in radians already; converting them again with np.radians / "
            "np.deg2rad shrinks every turn by a factor 180/π ≈ 57.")
+
+UNIFORM_TANGENT = (
+    "the uniform tangent (p_{i+1} - p_{i-1})/2",
+    "(p_{i+1} - p_{i-1})/2 is the textbook's tangent for keys one second apart. Your keys are "
+    "not evenly spaced: the tangent is a velocity, m_i = (p_{i+1} - p_{i-1})/(t_{i+1} - "
+    "t_{i-1}), the difference divided by the time between the two neighbours{per_u}.")
+TANGENT_PARAMS = ("p_prev", "p_next", "t_prev", "t_i", "t_next")
+SPLINE_PARAMS = ("keys", "times", "t")
 
 PIVOTS = {
     "origin_pivot": ("the sub-chain turned about the world origin",
@@ -75,11 +87,42 @@ def shared_misconceptions(fn: Function) -> tuple[Misconception, ...]:
                 text.format(your=whose[0], Your=whose[0].capitalize(), has=whose[1],
                             **{"is": whose[2]}),
                 wrong=_changed_output(fn.reference, index, change)))
+    found.extend(tangent_mistakes(fn))
     angles = [i for i, p in enumerate(fn.params) if p in ANGLE_PARAMS]
     if angles:
         found.append(Misconception("degrees", fn.name, *DEGREES,
                                    wrong=_radians_again(fn.reference, angles)))
     return tuple(found)
+
+
+def tangent_mistakes(fn: Function) -> tuple[Misconception, ...]:
+    """The uniform Catmull–Rom tangent, where ``fn`` computes a tangent or a spline."""
+    title, text = UNIFORM_TANGENT
+    if fn.params == TANGENT_PARAMS:
+        return (Misconception("uniform_tangent", fn.name, title, text.replace("{per_u}", ""),
+                              wrong=lambda a, b, t0, t1, t2: (np.asarray(b) - a) / 2),)
+    if fn.params == SPLINE_PARAMS:
+        return (Misconception(
+            "uniform_tangent", fn.name, title,
+            text.replace("{per_u}", ", and on segment i the Hermite form takes h_i m_i, "
+                         "h_i m_{i+1} per unit u (h_i = t_{i+1} - t_i); the end keys take "
+                         "(p_1 - p_0)/(t_1 - t_0) and (p_{K-1} - p_{K-2})/(t_{K-1} - t_{K-2})"),
+            wrong=_uniform_spline),)
+    return ()
+
+
+def _uniform_spline(keys: np.ndarray, times: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Catmull–Rom with the tangents (p_{i+1} - p_{i-1})/2 per unit u (one-sided at the
+    ends), as if every key were one second from the next."""
+    keys, times, t = (np.asarray(a, dtype=float) for a in (keys, times, t))
+    m = np.empty_like(keys)
+    m[1:-1] = (keys[2:] - keys[:-2]) / 2
+    m[0], m[-1] = keys[1] - keys[0], keys[-1] - keys[-2]
+    i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2)
+    u = ((t - times[i]) / (times[i + 1] - times[i]))[:, None]
+    out: np.ndarray = ((2 * u**3 - 3 * u**2 + 1) * keys[i] + (u**3 - 2 * u**2 + u) * m[i]
+                       + (-2 * u**3 + 3 * u**2) * keys[i + 1] + (u**3 - u**2) * m[i + 1])
+    return out
 
 
 def pivot_mistakes(function: str,

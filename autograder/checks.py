@@ -167,10 +167,12 @@ class QuatCheck(Check):
         what = "a quaternion (w, x, y, z)" if len(shape) == 1 else f"a quaternion per {self.row}"
         return f"a numpy array of shape {shape}: {what}"
 
-    def compare(self, got: Array, expected: Array) -> str | None:
+    def compare(self, got: Array, expected: Array,
+                name: Callable[[int], str] | None = None) -> str | None:
         g, e = np.reshape(got, (-1, 4)), np.reshape(expected, (-1, 4))
         where: Callable[[int], str] = (
-            (lambda i: "") if np.ndim(got) == 1 else (lambda i: f"{self.row} {i} "))
+            (lambda i: "") if np.ndim(got) == 1 else
+            (lambda i: f"{name(i)} ") if name else (lambda i: f"{self.row} {i} "))
         norms = np.linalg.norm(g, axis=-1)
         bad = np.flatnonzero(np.abs(norms - 1.0) > self.atol)
         if bad.size:
@@ -234,7 +236,10 @@ class PointsCheck(Check):
         super().__init__(shape, atol, "points")
         self.row = row
 
-    def compare(self, got: Array, expected: Array) -> str | None:
+    def compare(self, got: Array, expected: Array,
+                name: Callable[[int], str] | None = None) -> str | None:
+        """``name(i)`` names row ``i`` (default ``"joint 3"``); the row is shown with enough
+        decimals to see where it differs."""
         err = np.max(np.abs(np.reshape(got, (len(got), -1)) - np.reshape(expected,
                                                                          (len(got), -1))), axis=1)
         bad = np.flatnonzero(err > self.atol)
@@ -242,7 +247,10 @@ class PointsCheck(Check):
             return None
         i = int(bad[0])
         others = f"; {bad.size} of {len(err)} {self.row}s are off" if bad.size > 1 else ""
-        return f"{self.row} {i} is at {show(got[i])}, expected {show(expected[i])}{others}"
+        digits = self.decimals(got[i], expected[i])
+        where = name(i) if name else f"{self.row} {i}"
+        return (f"{where} is at {show(got[i], digits)}, expected {show(expected[i], digits)}"
+                f"{others}")
 
 
 class IndexCheck(Check):

@@ -155,7 +155,10 @@ def judge(fn: Function, case: Case, expected: Any, out: Outcome, memory_mb: int 
                 break
         return CaseResult(case, "error", f"{fn.name} raised {text}", None, expected,
                           error=out.error)
-    return CaseResult(case, out.status, out.message, None, expected)
+    message = out.message
+    if out.status == "timeout" and fn.timeout_hint:
+        message = f"{message}: {fn.timeout_hint}"
+    return CaseResult(case, out.status, message, None, expected)
 
 
 def _explained(m: Misconception, error: dict[str, Any], case: Case) -> str | None:

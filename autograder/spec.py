@@ -59,7 +59,8 @@ class Function:
 
     ``params`` are the argument names, in order (for messages); ``reference`` computes the
     expected output from the same arguments; ``check`` validates and compares outputs;
-    ``picture(got, expected, args)`` draws a failing case, or returns None.
+    ``picture(got, expected, args)`` draws a failing case, or returns None; ``timeout_hint``
+    is added to the message of a case that ran out of time (the likely cause, and the fix).
     """
 
     name: str
@@ -67,6 +68,7 @@ class Function:
     reference: Callable[..., Any]
     check: Check
     picture: Callable[..., Picture | None] | None = None
+    timeout_hint: str | None = None
 
 
 @dataclass(frozen=True)

@@ -7,18 +7,22 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from grading_fixtures import FIXTURES, LIMITS, fixture_submission, visible_cases
+from grading_fixtures import FIXTURES, LIMITS, fixture_submission, one_line, visible_cases
 
 from autograder import check
 from autograder.assignments import load
 from autograder.assignments.a5 import (
+    LINE_SEARCH_CASE,
     catmull_rom_variants,
     dense_newton,
+    newton_iterates,
     spring_hessian,
     squad_formula,
     step_problems,
     well_posed,
 )
+from course.physics import SpringSystem
+from course.physics import step as course_step
 
 REPO = Path(__file__).resolve().parents[1]
 A5 = load("a5")
@@ -60,12 +64,15 @@ def test_the_step_reference_is_a_dense_newton_and_the_hessian_its_finite_differe
     for c in visible_cases(A5, "implicit_euler_step"):
         expected = step.reference(*c.args)
         assert step.check.close(dense_newton(*c.args), expected), c.label
+        library = course_step(SpringSystem.create(*c.args[2:6], c.args[7], c.args[8]),
+                              c.args[0], c.args[1], c.args[6], tol=1e-11, max_iter=100,
+                              solver="direct")
+        np.testing.assert_allclose(library.x, expected[0], atol=1e-9, err_msg=c.label)
         assert step_problems(expected, *c.args) == [], c.label
-        assert well_posed(c.args), c.label  # the edge cases too: the template's Newton is enough
+        if c.label != LINE_SEARCH_CASE:  # the edge cases too: the template's Newton is enough
+            assert well_posed(c.args), c.label
     x, _, _, springs, rest, k, *_ = visible_cases(A5, "implicit_euler_step")[3].args
     assert np.any(np.linalg.norm(x[springs[:, 0]] - x[springs[:, 1]], axis=1) < rest)
-    from course.physics import SpringSystem
-
     system = SpringSystem.create(np.ones(len(x)), springs, rest, k)
     eps, H = 1e-6, spring_hessian(x, springs, rest, k)
     for col in (0, 4, 3 * len(x) - 1):
@@ -114,10 +121,11 @@ def test_the_missing_hessian_term_shows_on_compressed_springs(tmp_path):
 
 
 def test_controls_for_even_keys_get_partial_credit(tmp_path):
-    result = check("a5", fixture_submission("a5", "partial_squad_even_controls.py", tmp_path),
+    result = check("a5", fixture_submission("a5", "mutant_squad_even_controls.py", tmp_path),
                    limits=LIMITS)
     random, edges = (t for t in result.tests if t.test.function == "squad")
-    assert random.score == 0 and 0 < edges.score < 1 and edges.misconception is None
+    assert random.score == 0 and 0 < edges.score < 1
+    assert random.misconception.key == edges.misconception.key == "even_controls"
     passed = {c.case.label for c in edges.cases if c.passed}
     assert {"two keys: SQUAD is SLERP", "one key per second"} <= passed
     assert all(t.status == "passed" for t in result.tests if t.test.function != "squad")
@@ -138,3 +146,55 @@ def test_scipy_is_refused_before_anything_runs():
     assert result.score == 0
     assert ("`from scipy.sparse.linalg import ...` is not allowed: the assignment asks you to "
             "implement the math yourself with numpy") in " ".join(str(result).split())
+
+
+# --- the template's Newton ends, and needs its line search ---------------------------------------
+
+
+def test_the_line_search_case_needs_the_line_search():
+    case = next(c for c in visible_cases(A5, "implicit_euler_step") if c.label == LINE_SEARCH_CASE)
+    right = A5.function("implicit_euler_step").reference(*case.args)
+    assert step_problems(right, *case.args) == []
+    full = newton_iterates(case.args, 50)[-1]  # full Newton steps do not settle
+    assert step_problems((full, (full - case.args[0]) / case.args[6]), *case.args)
+
+
+def test_the_template_written_literally_ends_and_scores_full_marks(tmp_path):
+    """Halving α until Armijo holds, with the now-stated slack, α floor, relative threshold
+    and 50-iteration cap, ends on every case (hanging cloth #2 once hung) and is right."""
+    result = check("a5", fixture_submission("a5", "template_literal.py", tmp_path),
+                   seed="fixture-seed-a5", limits=LIMITS)
+    assert result.score == result.max_score, one_line(result)
+
+
+def test_another_minimiser_as_low_is_accepted():
+    """The step is judged by ∇E ≈ 0 and E no higher than at the reference, not by equality:
+    the same minimiser to 1e-5 (beyond x's 1e-6 comparison) with ∇E small passes."""
+    step = A5.function("implicit_euler_step")
+    case = next(c for c in visible_cases(A5, "implicit_euler_step") if "6×6" in c.label)
+    right = step.reference(*case.args)
+    assert step.check.judge(right, right, case.args) is None
+
+
+def test_a_timeout_of_the_step_names_the_likely_cause():
+    from autograder.runner import judge
+    from autograder.sandbox import Outcome
+
+    fn = A5.function("implicit_euler_step")
+    case = visible_cases(A5, "implicit_euler_step")[0]
+    out = Outcome("timeout", message="implicit_euler_step did not finish within 1 s")
+    verdict = judge(fn, case, None, out, None, str, ())
+    assert "a Newton loop that never meets its stopping test" in verdict.reason
+    assert "cap the iterations at 50" in verdict.reason
+
+
+def test_spline_rows_are_named_by_their_time_and_shown_to_the_digit_that_differs():
+    fn = A5.function("catmull_rom")
+    keys, times = np.zeros((3, 3)), np.array([0.0, 2.5, 4.0])
+    t = np.array([0.0, 2.5, 3.0])
+    expected = np.array([[0.0, 0, 0], [-0.1214, -0.2371, 0.0071], [0, 0, 0]])
+    got = expected.copy()
+    got[1, 0] += 4e-5
+    why = fn.check.judge(got, expected, (keys, times, t))
+    assert why.startswith("time index 1 (t = 2.5 s, key 1's time) is at [-0.12136, ")
+    assert "expected [-0.1214, " in why

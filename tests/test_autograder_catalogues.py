@@ -5,6 +5,8 @@ diagnosed by name on the functions it breaks and nowhere else."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from grading_fixtures import (
     ASSIGNMENTS,
@@ -66,3 +68,5 @@ def test_mutant_is_diagnosed_by_name(key, name, tmp_path):
     fn, mistake = expectation(key, name)
     result = check(key, fixture_submission(key, name, tmp_path), seed=seed(key), limits=LIMITS)
     assert_diagnosed(result, key, fn, mistake)
+    for words in re.findall(r"^# says: (.+)$", (FIXTURES / key / name).read_text(), re.M):
+        assert words in one_line(result), (words, one_line(result))

@@ -366,6 +366,31 @@ def downward_only(parents, start, end):
     return np.array(path[path.index(top):], dtype=np.int64)
 
 
+def _ancestors(parents, j: int) -> list[int]:
+    out = [int(j)]
+    while parents[out[-1]] >= 0:
+        out.append(int(parents[out[-1]]))
+    return out
+
+
+def path_variant(how: str):
+    """``path_to`` as students get it wrong: ``"to_root"`` (up to joint 0 and down again, not
+    stopping at the lowest common ancestor), ``"reversed"`` (from the end to the start),
+    ``"ancestor_twice"`` (the common ancestor ending the way up and starting the way down),
+    ``"ancestor_dropped"`` (on neither)."""
+    def wrong(parents, start, end):
+        parents = np.asarray(parents)
+        up, down = _ancestors(parents, start), _ancestors(parents, end)
+        top = next(j for j in up if j in down)
+        rise, fall = up[:up.index(top)], down[:down.index(top)][::-1]
+        path = {"to_root": up + down[::-1][1:],
+                "reversed": (rise + [top] + fall)[::-1],
+                "ancestor_twice": rise + [top, top] + fall,
+                "ancestor_dropped": rise + fall}[how]
+        return np.array(path, dtype=np.int64)
+    return wrong
+
+
 # --- retarget_rest -----------------------------------------------------------------------------
 
 
@@ -466,11 +491,34 @@ def _in_degrees(C: np.ndarray) -> np.ndarray:
     return rot.quat_from_axis_angle(axis, np.degrees(angle))
 
 
+def _first_bone_corrections(parents, offsets_from, offsets_to) -> np.ndarray:
+    """C_i as the shortest arc for the FIRST child bone only, even where the children point
+    two ways (the hips, the chest): the other bones come out twisted about the first."""
+    parents = np.asarray(parents)
+    C = np.tile([1.0, 0, 0, 0], (len(parents), 1))
+    for j in range(len(parents)):
+        kids = np.flatnonzero(parents == j)
+        if kids.size:
+            c = kids[0]
+            C[j] = rot.quat_between(offsets_to[c], offsets_from[c])
+        elif j:
+            C[j] = C[parents[j]]
+    return C
+
+
 def _retarget_variant(**how):
     def wrong(parents, offsets_from, offsets_to, quats):
-        C = _corrections(parents, offsets_from, offsets_to, how.get("swapped", False))
+        if how.get("copied"):
+            return np.array(quats, dtype=float)
+        C = (_first_bone_corrections(parents, offsets_from, offsets_to) if how.get("first_bone")
+             else _corrections(parents, offsets_from, offsets_to, how.get("swapped", False)))
         if how.get("degrees"):
             C = _in_degrees(C)
+        if how.get("left"):  # C_p⁻¹ C_i R_i: both corrections on the left
+            parents_ = np.asarray(parents)
+            inv_parent = np.concatenate([[[1.0, 0, 0, 0]],
+                                         rot.quat_conjugate(C[parents_[1:]])])
+            return rot.quat_mul(inv_parent, rot.quat_mul(C, quats))
         return corrected(parents, quats, C, how.get("right_side", True))
     return wrong
 
@@ -528,6 +576,45 @@ def _world_turns_as_local(got, parents, offsets, local_quats, root_position, fix
                            effector, target, iterations)
 
 
+def _world_returned(got, parents, offsets, local_quats, root_position, fixed, effector,
+                    target, iterations):
+    """Right once read as world orientations: R_i = Q_{p(i)}^{-1} Q_i of the answer is a
+    right answer (and the answer itself is not)."""
+    args = (parents, offsets, local_quats, root_position, fixed, effector, target, iterations)
+    got = rot.quat_normalize(np.asarray(got, float))
+    if not ik_problems(got, *args):
+        return False
+    return not ik_problems(np.array(local_from_global(parents, got)), *args)
+
+
+def ccd_local_turns(parents, offsets, local_quats, root_position, fixed, effector, target,
+                    iterations):
+    """CCD on the local rotations with the world turn multiplied on, R_a ← D R_a, each pivot
+    of the path from the effector back, forward kinematics from joint 0 each time (the lab
+    report's bug inside the loop): the rotations after each sweep, up to ``iterations``."""
+    parents = np.asarray(parents)
+    R = np.array(local_quats, dtype=float)
+    path = tree_path(parents, fixed, effector)
+    for _ in range(iterations):
+        for a in path[-2::-1]:
+            P, _ = ref_fk(parents, offsets, R, root_position)
+            u, v = P[effector] - P[a], target - P[a]
+            if _norm(u) < 1e-12 or _norm(v) < 1e-12:
+                continue
+            R[a] = rot.quat_mul(rot.quat_between(u, v), R[a])
+        yield R.copy()
+
+
+def _local_turns_in_loop(got, *args) -> bool:
+    """Wrong, and the rotations of :func:`ccd_local_turns` after some number of sweeps
+    (loosely, 1e-2, as :func:`_wrong_joint`: a CCD that does not converge wanders)."""
+    g = np.asarray(got, dtype=float)
+    if not ik_problems(g, *args):
+        return False
+    return any(bool(np.all(np.minimum(np.abs(g - w).max(-1), np.abs(g + w).max(-1)) <= 1e-2))
+               for w in ccd_local_turns(*args))
+
+
 def ccd_about_fixed(parents, offsets, local_quats, root_position, fixed, effector, target,
                     iterations, lever: int = 0):
     """The template's CCD, written out: sweeps from the effector back to the fixed joint, each
@@ -580,12 +667,47 @@ MISCONCEPTIONS = (
         "Spine, ...); yours starts at the common ancestor, as when only children are followed.",
         wrong=downward_only),
     Misconception(
+        "to_root", "path_to", "the path taken through the root, past the common ancestor",
+        "Your path walks from the start all the way up to joint 0 and back down to the end. "
+        "It should turn at the LOWEST common ancestor, the first joint the two walks to the "
+        "root share (Chest for the two hands, not Hips): stop the way up there and begin the "
+        "way down from it; the joints above it are not between the two.",
+        wrong=path_variant("to_root")),
+    Misconception(
+        "reversed", "path_to", "the path listed backwards (end first)",
+        "Your path starts at the end effector and ends at the fixed joint: the joints are "
+        "right, the order is not. path_to(parents, start, end) lists start first and end last "
+        "(the way up from start, then the way down to end); reverse the walk from end.",
+        wrong=path_variant("reversed")),
+    Misconception(
+        "ancestor_twice", "path_to", "the common ancestor listed twice",
+        "Your path has the lowest common ancestor twice in a row: once at the top of the way "
+        "up and again at the start of the way down. List it once: up from start to the "
+        "ancestor (included), then down to end WITHOUT the ancestor, "
+        "up[:up.index(top) + 1] + down[:down.index(top)][::-1].",
+        wrong=path_variant("ancestor_twice")),
+    Misconception(
+        "ancestor_dropped", "path_to", "the common ancestor left out",
+        "Your path goes from the last joint of the way up straight to the first of the way "
+        "down, skipping the lowest common ancestor itself: consecutive joints of a path are "
+        "parent and child, and the two sides only meet through the ancestor. Include it once, "
+        "between the way up and the way down.",
+        wrong=path_variant("ancestor_dropped")),
+    Misconception(
         "world_as_local", "ik_local", "a world-frame turn applied to a local rotation",
         "A turn D found in world coordinates (the shortest arc from e - r_i to t - r_i) turns "
         "the joint's WORLD orientation, Q'_i = D Q_i; its local rotation is then "
         "R'_i = Q'_{p(i)}^{-1} Q'_i = Q_{p(i)}^{-1} D Q_{p(i)} R_i. Your rotations are right "
-        "once read as D R_i: the world turn multiplied onto the local one.",
-        symptom=_world_turns_as_local),
+        "once read as D R_i: the world turn multiplied onto the local one (R_i ← D R_i, at "
+        "the end or inside the loop).",
+        symptom=lambda got, *args: _world_turns_as_local(got, *args)
+        or _local_turns_in_loop(got, *args)),
+    Misconception(
+        "world_returned", "ik_local", "world orientations returned instead of local rotations",
+        "You returned the joints' WORLD orientations Q_i; ik_local returns LOCAL rotations, "
+        "each relative to its parent: R_0 = Q_0, R_i = Q_{p(i)}^{-1} Q_i. Yours are right once "
+        "read back that way.",
+        symptom=_world_returned),
     *pivot_mistakes("ik_local", {"wrong_joint": _wrong_joint}),
     Misconception(
         "root_moved", "ik_local", "joint 0 held in place, not the fixed joint",
@@ -595,10 +717,32 @@ MISCONCEPTIONS = (
         "0 were held: the planted foot turned (or slid) with the leg.",
         symptom=_joint0_held),
     Misconception(
+        "copied", "retarget_rest", "the rotations copied unchanged",
+        "You returned the source's local rotations as they are. They were made for the "
+        "source's rest pose: on a skeleton whose rest bones point elsewhere (A pose vs T pose) "
+        "the same R_i point the bones wrongly. Correct each by the rest-pose difference, "
+        "R'_i = C_{p(i)}^{-1} R_i C_i, with C_i turning the target's rest bones below joint i "
+        "onto the source's.",
+        symptom=_same_bones_as(_retarget_variant(copied=True))),
+    Misconception(
+        "both_left", "retarget_rest", "both corrections on the left (C_p⁻¹ C_i R_i)",
+        "Yours is C_{p(i)}^{-1} C_i R_i: the correction C_i acts in the joint's rest frame, "
+        "BEFORE the motion R_i, so it goes on the right: R'_i = C_{p(i)}^{-1} R_i C_i.",
+        symptom=_same_bones_as(_retarget_variant(left=True))),
+    Misconception(
+        "first_bone_only", "retarget_rest",
+        "a correction that maps one child bone and twists the others",
+        "Your C_i is the shortest arc for one child bone only; where a joint's children point "
+        "two ways (the hips: both legs and the spine; the chest: the arms and the neck) that "
+        "arc leaves the other bones twisted about the first. Use the rotation that takes "
+        "both directions: an orthonormal frame from two child bones in each skeleton, "
+        "C = F_from F_to^T.",
+        symptom=_same_bones_as(_retarget_variant(first_bone=True))),
+    Misconception(
         "wrong_side", "retarget_rest", "the correction on the wrong side (C R instead of R C)",
         "The correction acts in the joint's rest frame, before the motion: Q'_i = Q_i C_i, so "
         "R'_i = C_{p(i)}^{-1} R_i C_i (C on the RIGHT of R_i, the parent's inverse on the left); "
-        "yours is C_i R_i C_{p(i)}^{-1}.",
+        "yours is C_i R_i C_{p(i)}^{-1}: the parent's inverse and the correction swapped.",
         symptom=_same_bones_as(_retarget_variant(right_side=False))),
     Misconception(
         "wrong_skeleton", "retarget_rest", "the correction from the other skeleton's offsets",
