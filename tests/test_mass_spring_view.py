@@ -57,8 +57,8 @@ def test_simulator_controls_drive_the_simulation():
     assert "Newton" in sim.readout.value
     sim.sliders["stiffness"].value = 100.0
     assert np.allclose(sim.cloth.system.k.max(), 100.0)
-    sim.play.value += 1  # a tick of play
-    assert sim.steps == 2
+    sim.play.value += 1  # a tick of play: 40 ms of simulated time at h = 1/60 s, 2 steps
+    assert sim.steps_per_tick == 2 and sim.steps == 3
     sim.reset_button.click()
     assert sim.steps == 0 and np.allclose(sim.scene.positions, sim.cloth.positions)
     sim.close()
@@ -102,5 +102,52 @@ def test_the_energy_readout_shows_every_part_and_they_add_up_to_e():
             assert gravity < 0 < kinetic and spring > 0
         sim.reset()
         assert "-0.0000" not in sim.readout.value  # at rest: no negative zero
+    finally:
+        sim.close()
+
+
+def test_play_advances_in_simulated_time_and_says_how_fast():
+    sim = cloth_simulator(grid_cloth(6, 6), window_size=(240, 180))
+    try:
+        h = sim.sliders["h"]
+        h.value = 0.01  # 40 ms per tick at real time: 4 steps
+        assert sim.steps_per_tick == 4 and sim.playback_speed == pytest.approx(1.0)
+        sim.play.value += 1
+        assert sim.steps == 4 and sim.time == pytest.approx(0.04)
+        assert "4 steps of h per tick, 1× real time" in sim.readout.value
+        h.value = 1e-4  # real time would need 400 steps per tick: capped, and said so
+        assert sim.steps_per_tick == sim.max_steps_per_tick == 10
+        assert sim.playback_speed == pytest.approx(0.025)
+        assert "10 steps of h per tick, 0.025× real time (capped" in sim.readout.value
+        sim.play.value += 1
+        assert sim.steps == 14 and "simulated" in sim.readout.value
+        sim.step_button.click()  # one step is one step
+        assert sim.steps == 15
+    finally:
+        sim.close()
+    slow = cloth_simulator(grid_cloth(4, 4), window_size=(160, 120), speed=0.25, h=0.005)
+    try:
+        assert slow.steps_per_tick == 2 and "0.25× real time" in slow.readout.value
+        assert "capped" not in slow.readout.value
+    finally:
+        slow.close()
+
+
+def test_the_view_keeps_its_size_when_the_readout_grows():
+    sim = cloth_simulator(grid_cloth(6, 6), window_size=(640, 480))
+    try:
+        panel, view = sim.widget.children
+        assert panel is sim.panel and view is sim.scene.widget()
+        # the panel and the readout have a fixed width, so the readout's long lines wrap
+        for w in (panel, sim.readout):
+            assert w.layout.width == w.layout.min_width == f"{sim.PANEL_WIDTH}px"
+        assert panel.layout.flex == "0 0 auto"
+        # the view neither shrinks nor grows: its own fixed width, no flex
+        assert view.layout.width == view.layout.min_width == "640px"
+        assert view.layout.flex == "0 0 auto"
+        sim.sliders["method"].value = "explicit"
+        sim.advance(80)  # long lines: the exploded warning
+        assert sim.exploded
+        assert view.layout.width == "640px" and panel.layout.width == f"{sim.PANEL_WIDTH}px"
     finally:
         sim.close()

@@ -611,3 +611,54 @@ def test_readouts_never_print_minus_zero_nor_one_iterations():
     assert controls._vec([-1e-12, 1.0]) == "(+0.000, +1.000)"
     assert "-0.000" not in controls._matrix_html(np.array([[1.0, -1e-17], [-2e-16, 1.0]]))
     assert controls._iterations(1) == "1 iteration" and controls._iterations(0) == "0 iterations"
+
+
+def _px(length: str) -> float:
+    assert length.endswith("px"), length
+    return float(length[:-2])
+
+
+def test_full_body_panel_and_view_fit_side_by_side_beside_the_file_browser(sample_motion):
+    """Issue 28: at 1366 px with JupyterLab's file browser open the notebook is ~1000 px wide
+    (less its gutter): the panel and the view must share one line there."""
+    fb = controls.full_body_ik(sample_motion)
+    try:
+        panel, view = fb.widget.children
+        assert fb.widget.layout.flex_flow == "row wrap"
+        # the panel: a fixed width that holds its widest children (sliders, readout, pad)
+        width = _px(panel.layout.width)
+        assert panel.layout.min_width == panel.layout.width and panel.layout.flex == "0 0 auto"
+        assert _px(fb.readout.layout.width) <= width
+        for c in "xyz":
+            assert _px(fb.sliders[c].layout.width) <= width
+        pad = fb.drag.pad
+        assert pad.size <= 140 and _px(pad.layout.margin.split()[3]) + pad.size + 2 <= width
+        # the view: its flex basis is what the line needs; it grows and shrinks from there
+        grow, shrink, basis = view.layout.flex.split()
+        assert (grow, shrink) == ("1", "1")
+        margin = _px(panel.layout.margin.split()[1])
+        assert width + margin + _px(basis) <= 900  # ~1000 px less the prompt gutter
+        assert _px(view.layout.min_width) <= _px(basis)
+        assert view.layout.width is None and "640px" in view.layout.max_width
+    finally:
+        fb.close()
+
+
+def test_full_body_view_is_marked_stale_while_a_solve_fails(sample_motion):
+    fb = controls.full_body_ik(sample_motion, 10)
+    try:
+        ik = fb.scene.skeleton("IK")
+        assert not fb.stale and all(a.prop.opacity == 1.0 for a in ik.actors)
+        drawn = ik.positions
+        fb.sliders["method"].value = "two_link"  # two effectors: two_link cannot solve it
+        assert fb.stale
+        assert "two_link" in fb.readout.value or "2-bone" in fb.readout.value \
+            or "chain" in fb.readout.value
+        assert "last solved pose" in fb.readout.value
+        assert all(a.prop.opacity == fb.STALE_OPACITY for a in ik.actors)
+        np.testing.assert_array_equal(ik.positions, drawn)  # the old pose, kept but dimmed
+        fb.sliders["method"].value = "dls"  # a good solve clears the mark
+        assert not fb.stale and "last solved pose" not in fb.readout.value
+        assert all(a.prop.opacity == 1.0 for a in ik.actors)
+    finally:
+        fb.close()

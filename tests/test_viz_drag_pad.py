@@ -264,3 +264,45 @@ def test_the_pads_dot_is_never_cut_and_stays_under_the_pointer(tmp_path, css_sca
                                [[r + 1, size - r - 1], [size - r - 1, r + 1],
                                 [r + 1, r + 1], [centre, centre],
                                 [centre + 0.3 * (centre - r - 1), centre + 0.8 * (centre - r - 1)]])
+
+
+def test_full_body_pad_corners_are_the_target_sliders_limits():
+    """Issue 28: half-way to a corner the pad drove two sliders to their limits. Now its
+    corners are their limits, its middle their middles, and the third slider is kept."""
+    from course import data
+
+    fb = controls.full_body_ik(data.load("wave"))
+    try:
+        lo = np.array([fb.sliders[c].min for c in "xyz"])
+        hi = np.array([fb.sliders[c].max for c in "xyz"])
+        moved = [int(np.argmax(np.abs(fb.drag.right))), int(np.argmax(np.abs(fb.drag.up)))]
+        kept = 3 - sum(moved)
+        assert sorted(moved) != [0, 2] and moved[1] == 1  # a vertical face: y is up
+        for u in (-1.0, -0.5, 0.0, 0.5, 1.0):
+            for v in (-1.0, -0.5, 0.0, 0.5, 1.0):
+                fb.drag.pad.uv = [u, v]  # as the browser sends it
+                rel = (fb.drag.position([u, v]) - fb.root_position - lo) / (hi - lo)
+                expected = (np.array([u, v]) * [np.sign(fb.drag.right[moved[0]]), 1] + 1) / 2
+                np.testing.assert_allclose(rel[moved], expected, atol=1e-9)
+                assert 0 <= rel[kept] <= 1
+                name = fb.sliders["edit"].value
+                target = fb.targets[name] - fb.root_position
+                np.testing.assert_allclose(target, fb.drag.position([u, v]) - fb.root_position,
+                                           atol=1e-9)  # nothing clipped: inside the sliders
+        assert fb._pad_caption().startswith("drag target")
+    finally:
+        fb.close()
+
+
+def test_fit_in_box_is_the_box_face_seen_along_an_axis_and_inside_it_otherwise():
+    from course.viz.drag_pad import fit_in_box
+
+    np.testing.assert_allclose(fit_in_box([1, 0, 0], [0, 1, 0], [2.0, 3.0, 5.0]), [2.0, 3.0])
+    r = np.array([1.0, 0, -1]) / np.sqrt(2)
+    s = np.array([0.0, 1, 0])
+    box = np.array([1.0, 2.0, 3.0])
+    a, b = fit_in_box(r, s, box)
+    corner = np.abs(a * r) + np.abs(b * s)
+    assert np.all(corner <= box + 1e-12) and np.isclose(np.max(corner / box), 1.0)
+    with pytest.raises(ValueError, match="positive half-extents"):
+        fit_in_box(r, s, [1.0, 0.0, 1.0])

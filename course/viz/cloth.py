@@ -130,20 +130,29 @@ class ClothSimulator:
     ----------
     cloth : a :class:`course.physics.Cloth`.
     method : ``"implicit"``, ``"symplectic"`` or ``"explicit"``.
-    h : the first time step (s); ``steps_per_frame`` steps are taken per tick of play.
+    h : the first time step (s).
+    speed : the simulated seconds per real second that play aims for (1.0: real time). Each
+        tick of play (every ``interval`` ms) takes as many steps of ``h`` as that needs, at
+        least one and at most ``max_steps_per_tick`` (the cost cap): at a small ``h`` play is
+        slower than ``speed``, and the readout says so ("0.05× real time").
     """
 
+    PANEL_WIDTH = 380  # px: the controls and the readout; fixed, so the view never moves
+
     def __init__(self, cloth: Any, *, method: str = "implicit", h: float = 1 / 60,
-                 steps_per_frame: int = 1, window_size: tuple[int, int] = (640, 480)) -> None:
+                 speed: float = 1.0, max_steps_per_tick: int = 10, interval: int = 40,
+                 window_size: tuple[int, int] = (640, 480)) -> None:
         from course.physics import METHODS
 
         if method not in METHODS:
             raise ValueError(f"method: must be one of {METHODS}, got {method!r}")
         self.base = cloth
         self.cloth = cloth
-        self.steps_per_frame = int(steps_per_frame)
+        if not speed > 0 or int(max_steps_per_tick) < 1 or int(interval) < 1:
+            raise ValueError("speed, max_steps_per_tick and interval must be positive")
+        self.speed, self.max_steps_per_tick = float(speed), int(max_steps_per_tick)
         self.scene = ClothScene(cloth, window_size=window_size)
-        self.play = widgets.Play(value=0, min=0, max=10**9, step=1, interval=40,
+        self.play = widgets.Play(value=0, min=0, max=10**9, step=1, interval=int(interval),
                                  description="play")
         self.sliders = {
             "stiffness": _log_slider("stiffness k", cloth.stiffness, 10.0, 1e5, ".0f"),
@@ -155,20 +164,25 @@ class ClothSimulator:
         }
         self.step_button = widgets.Button(description="step", icon="step-forward")
         self.reset_button = widgets.Button(description="reset", icon="undo")
-        self.readout = widgets.HTML()
-        self.play.observe(latest_on_gl_thread(lambda _c: self.advance()), names="value")
+        width = f"{self.PANEL_WIDTH}px"  # long readout lines wrap inside it
+        self.readout = widgets.HTML(layout=widgets.Layout(width=width, min_width=width))
+        self.play.observe(latest_on_gl_thread(lambda _c: self.tick()), names="value")
         self.sliders["stiffness"].observe(
             latest_on_gl_thread(lambda c: self._set_stiffness(c["new"])), names="value")
-        for name in ("h", "method"):
+        for name in ("h", "method"):  # (h changes the steps per tick: shown)
             self.sliders[name].observe(latest_on_gl_thread(lambda _c: self._show()),
                                        names="value")
-        self.step_button.on_click(latest_on_gl_thread(lambda _b: self.advance()))
+        self.step_button.on_click(latest_on_gl_thread(lambda _b: self.advance(1)))
         self.reset_button.on_click(latest_on_gl_thread(lambda _b: self.reset()))
         buttons = widgets.HBox([self.play, self.step_button, self.reset_button])
-        panel = widgets.VBox([buttons, *self.sliders.values(), self.readout],
-                             layout=widgets.Layout(flex="0 0 auto", margin="0 12px 0 0"))
-        self.widget = widgets.HBox([panel, self.scene.widget()],
-                                   layout=widgets.Layout(align_items="flex-start"))
+        self.panel = widgets.VBox([buttons, *self.sliders.values(), self.readout],
+                                  layout=widgets.Layout(flex="0 0 auto", width=width,
+                                                        min_width=width, margin="0 12px 0 0"))
+        view = self.scene.widget()
+        w = f"{window_size[0]}px"  # the view keeps its size whatever the readout says
+        view.layout.width, view.layout.min_width, view.layout.flex = w, w, "0 0 auto"
+        self.widget = widgets.HBox([self.panel, view], layout=widgets.Layout(
+            align_items="flex-start", flex_flow="row wrap"))
         self.reset()
 
     def _ipython_display_(self) -> None:
@@ -189,15 +203,30 @@ class ClothSimulator:
         self.scene.set_positions(self.x, render=False)
         self._show()
 
-    def advance(self, n: int | None = None) -> None:
-        """Take ``n`` steps (default ``steps_per_frame``) and draw the result once."""
+    @property
+    def steps_per_tick(self) -> int:
+        """How many steps of ``h`` one tick of play takes: enough for ``speed``, capped."""
+        wanted = self.speed * self.play.interval / 1000 / self.sliders["h"].value
+        return int(min(max(round(wanted), 1), self.max_steps_per_tick))
+
+    @property
+    def playback_speed(self) -> float:
+        """Simulated seconds per real second while playing (1.0: real time)."""
+        return self.steps_per_tick * self.sliders["h"].value / (self.play.interval / 1000)
+
+    def tick(self) -> None:
+        """What one tick of play does: :attr:`steps_per_tick` steps, drawn once."""
+        self.advance(self.steps_per_tick)
+
+    def advance(self, n: int = 1) -> None:
+        """Take ``n`` steps and draw the result once."""
         from course.physics import step
 
         if self.exploded:
             return
         h, method = self.sliders["h"].value, self.sliders["method"].value
         with np.errstate(over="ignore", invalid="ignore"):
-            for _ in range(self.steps_per_frame if n is None else n):
+            for _ in range(n):
                 x, v, stats = step(self.cloth.system, self.x, self.v, h, method)
                 if not (np.all(np.isfinite(x)) and np.abs(x).max() < 1e3):
                     self.exploded = True  # stop here: a blown-up state cannot be drawn
@@ -214,7 +243,11 @@ class ClothSimulator:
         e = self.cloth.system.energy(self.x, self.v)
         total, kinetic, spring, gravity = (round(v, 4) + 0.0
                                            for v in (e.total, e.kinetic, e.spring, e.gravity))
-        lines = [f"t = {self.time:.3f} s ({self.steps} steps)",
+        speed = self.playback_speed
+        lines = [f"t = {self.time:.3f} s simulated ({self.steps} steps)",
+                 f"play: {self.steps_per_tick} steps of h per tick, {speed:.2g}× real time"
+                 + (f" (capped at {self.max_steps_per_tick} steps per tick)"
+                    if speed < 0.99 * self.speed else ""),
                  f"energy E = {total:+.4f} J = kinetic {kinetic:.4f} + spring {spring:.4f} "
                  f"+ gravity ({gravity:+.4f})"]
         if self.last is not None:

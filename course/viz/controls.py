@@ -632,15 +632,16 @@ def _ik_methods() -> tuple[str, ...]:
     return METHODS
 
 
-def _drag_pad(scene: SkeletonScene, center: ArrayLike, half: float, position: ArrayLike,
-              on_drag: Any, size: int = 180, normal: Array | None = None) -> Any:
+def _drag_pad(scene: SkeletonScene, center: ArrayLike, half: float | None, position: ArrayLike,
+              on_drag: Any, size: int = 180, normal: Array | None = None,
+              box: ArrayLike | None = None) -> Any:
     """A pad that drags the target in the plane the view's camera faces, or across
     ``normal`` (views that take no mouse: browser-rendered, static), see
     :mod:`course.viz.drag_pad`."""
     from .drag_pad import ViewPlaneDrag
 
     return ViewPlaneDrag(scene.plotter.camera, center, half, position, on_drag, size=size,
-                         normal=normal)
+                         normal=normal, box=box)
 
 
 def _hinge_plane_normal(skeleton: Any, joints: Sequence[int], orientations: Array
@@ -682,11 +683,12 @@ def _facing(normal: Array | None) -> str | None:
     return None
 
 
-def _pad_row(drag: Any) -> list[widgets.Widget]:
+def _pad_row(drag: Any, text: str = "drag the target in the view's plane:"
+             ) -> list[widgets.Widget]:
     """The pad with a caption, for a control panel (nothing where the view takes the mouse)."""
     if drag is None:
         return []
-    caption = widgets.HTML("drag the target in the view's plane:",
+    caption = widgets.HTML(text,
                            layout=widgets.Layout(margin="4px 0 2px 84px"))
     drag.pad.layout = widgets.Layout(margin="0 0 6px 84px", flex="0 0 auto")
     return [caption, drag.pad]
@@ -892,7 +894,18 @@ def ik_playground(skeleton: Any, methods: Sequence[str] | None = None, **kwargs:
 
 class FullBodyIK(Control):
     """IK on one frame of a clip: choose the root joint (the one that stays put), the end
-    effectors and their targets; the captured pose (grey) stays beside the solution."""
+    effectors and their targets; the captured pose (grey) stays beside the solution.
+
+    The panel (``PANEL_WIDTH``) and the view (``VIEW_BASIS`` wide, growing to its window's
+    width) fit side by side in ``PANEL_WIDTH + 12 + VIEW_BASIS`` pixels: a notebook beside
+    JupyterLab's file browser at 1366 px keeps the pad and the view on screen together.
+    When a solve fails, the view keeps the last solved pose, dimmed, and the readout says so.
+    """
+
+    PANEL_WIDTH = 360  # px: the sliders (340) and the readout
+    PAD_SIZE = 120  # px: the drag pad, under the sliders
+    VIEW_BASIS = 520  # px: the view's width before it grows (up to its 640 px window)
+    STALE_OPACITY = 0.3  # the IK skeleton while it shows a pose that is not the setting's
 
     def __init__(self, motion: Any, frame: int = 0, *, root: str | None = None,
                  effectors: Sequence[str] | None = None, method: str | None = None) -> None:
@@ -930,7 +943,8 @@ class FullBodyIK(Control):
                                       step=height / 200, description=f"target {c}",
                                       **_slider_style(".1f")) for k, c in enumerate("xyz")},
         }
-        self.readout = _readout(4, "360px")
+        self.readout = _readout(4, f"{self.PANEL_WIDTH}px")
+        self.stale = False
         self.scene = SkeletonScene(window_size=(640, 520))
         corners = np.stack(np.meshgrid(*box.T, indexing="ij"), axis=-1).reshape(-1, 3)
         self.scene.add_skeleton(sk.parents, self.positions, name="captured", color=GHOST,
@@ -940,9 +954,14 @@ class FullBodyIK(Control):
         self._editing = False
         self.handle = (self.scene.add_target_handle(self.targets[effectors[0]], self._dragged)
                        if self.scene.draggable else None)
+        # the pad is the face of the sliders' box that the camera sees most (x-y or z-y): its
+        # corners are two sliders' limits, its middle their middles; the third keeps its value
+        camera = self.scene.plotter.camera
+        toward = np.abs(np.subtract(camera.position, camera.focal_point))
         self.drag = None if self.handle is not None else _drag_pad(
-            self.scene, box.mean(axis=0), float(np.ptp(box, axis=0).max()) / 2,
-            self.targets[effectors[0]], self._dragged, size=160)
+            self.scene, box.mean(axis=0), None, self.targets[effectors[0]], self._dragged,
+            size=self.PAD_SIZE, normal=np.eye(3)[0 if toward[0] > toward[2] else 2],
+            box=np.ptp(box, axis=0) / 2)
         _on_value(self.sliders["effectors"], lambda _c: self._effectors_changed())
         _on_value(self.sliders["edit"], lambda _c: self._load_target())
         for k in ("root", "method"):
@@ -953,10 +972,19 @@ class FullBodyIK(Control):
         origin = widgets.HTML(f"target, from the captured <b>{sk.names[0]}</b>:",
                               layout=widgets.Layout(margin="2px 0 0 8px"))
         controls = list(self.sliders.values())
-        self.widget = _side_by_side(
-            widgets.VBox([*controls[:4], origin, *controls[4:], *_pad_row(self.drag),
-                          self.readout]),
-            self.scene.widget())
+        width = f"{self.PANEL_WIDTH}px"
+        pad = _pad_row(self.drag, self._pad_caption())
+        self.panel = widgets.VBox([*controls[:4], origin, *controls[4:], *pad, self.readout],
+                                  layout=widgets.Layout(width=width, min_width=width))
+        view = self.scene.widget()
+        # it starts at VIEW_BASIS on the panel's line and grows to the window's width; never
+        # wider than the notebook, never under 320 px (then it wraps below the panel)
+        view.layout.flex = f"1 1 {self.VIEW_BASIS}px"
+        view.layout.width = None
+        view.layout.max_width = f"min(100%, {self.scene.plotter.window_size[0]}px)"
+        self.widget = _side_by_side(self.panel, view)
+        self.panel.layout.flex = "0 0 auto"
+        self.panel.layout.margin = "0 12px 0 0"
         self._load_target()
 
     def _effectors_changed(self) -> None:
@@ -1023,8 +1051,12 @@ class FullBodyIK(Control):
                 method=self.sliders["method"].value, root=self.sliders["root"].value,
             )
         except ValueError as err:  # e.g. an effector on the root's side: say why
-            self.readout.value = f"<span style='color:#a4161a'>{err}</span>"
+            self._mark_stale(True)
+            self.readout.value = (
+                f"<span style='color:#a4161a'>{err}</span><br><i style='color:#6b7480'>the "
+                "view shows the last solved pose (dimmed), not this setting</i>")
             return
+        self._mark_stale(False, render=False)
         self.scene.set_targets(np.array(list(targets.values())) if targets
                                else np.empty((0, 3)), render=False)
         self.scene.set_pose(self.result.positions, name="IK")
@@ -1035,6 +1067,27 @@ class FullBodyIK(Control):
             f"{'converged' if r.converged else f'not converged ({r.reason})'}, "
             f"{_iterations(r.iterations)}, residual {residual[-1]:.2e}"
         )
+
+
+    def _pad_caption(self) -> str:
+        """Which sliders the pad moves, e.g. "drag target x → and y ↑ (z: its slider)"."""
+        if self.drag is None:
+            return ""
+        right, up, depth = (int(np.argmax(np.abs(a))) for a in
+                            (self.drag.right, self.drag.up, self.drag.depth_axis))
+        sign = "" if self.drag.right[right] > 0 else "−"
+        return (f"drag target {sign}{'xyz'[right]} → and {'xyz'[up]} ↑ "
+                f"({'xyz'[depth]}: its slider):")
+
+    def _mark_stale(self, stale: bool, *, render: bool = True) -> None:
+        """Dim the IK skeleton while it shows a pose the current setting did not solve."""
+        if stale == self.stale:
+            return
+        self.stale = stale
+        for actor in self.scene.skeleton("IK").actors:
+            actor.prop.opacity = self.STALE_OPACITY if stale else 1.0
+        if render:
+            self.scene.render()
 
 
 def full_body_ik(motion: Any, frame: int = 0, **kwargs: Any) -> FullBodyIK:

@@ -100,14 +100,18 @@ class ViewPlaneDrag:
     normal : (3,) the pad's plane is across this axis instead of facing the camera: a chain
         of hinges about one axis reaches only a plane across it, so the pad stays in that
         plane (the camera's right and up, projected into it, keep the pad's directions).
+    box : (3,) half-extents of an axis-aligned box around ``center`` (e.g. the ranges of
+        x/y/z sliders): instead of ``half``, the pad spans the largest rectangle in its plane
+        inside that box, in the proportions of the box's outline (:func:`fit_in_box`), so
+        that the pad's corners reach the box's faces and no point of the pad leaves it.
     """
 
-    def __init__(self, camera: Any, center: ArrayLike, half: float, position: ArrayLike,
+    def __init__(self, camera: Any, center: ArrayLike, half: float | None, position: ArrayLike,
                  on_drag: Callable[[Array], None], *, size: int = 180,
-                 normal: ArrayLike | None = None) -> None:
+                 normal: ArrayLike | None = None, box: ArrayLike | None = None) -> None:
         from ._backend import latest_on_gl_thread
 
-        if not half > 0:
+        if box is None and not (half is not None and half > 0):
             raise ValueError(f"half must be positive, got {half!r}")
         d = np.subtract(camera.position, camera.focal_point)
         towards_camera = d / np.linalg.norm(d)
@@ -126,7 +130,11 @@ class ViewPlaneDrag:
         self.right = right / np.linalg.norm(right)
         self.up = np.cross(self.depth_axis, self.right)
         self.center = np.asarray(center, dtype=np.float64).reshape(3)
-        self.half = float(half)
+        if box is not None:
+            self.half_uv = fit_in_box(self.right, self.up, box)
+        else:
+            self.half_uv = np.full(2, float(half))  # type: ignore[arg-type]
+        self.half = float(self.half_uv.max())
         self._depth = 0.0
         self._quiet = False
         self.pad = DragPad(size=size)
@@ -138,7 +146,8 @@ class ViewPlaneDrag:
     def position(self, uv: ArrayLike) -> Array:
         """The target at pad point ``uv (2,)``: in the view plane, at the kept depth."""
         u, v = np.clip(np.asarray(uv, dtype=np.float64).reshape(2), -1.0, 1.0)
-        p: Array = (self.center + self.half * (u * self.right + v * self.up)
+        hu, hv = self.half_uv
+        p: Array = (self.center + hu * u * self.right + hv * v * self.up
                     + self._depth * self.depth_axis)
         return p
 
@@ -146,7 +155,8 @@ class ViewPlaneDrag:
         """Put the dot where ``position (3,)`` lies (clipped to the pad); keep its depth."""
         rel = np.asarray(position, dtype=np.float64).reshape(3) - self.center
         self._depth = float(rel @ self.depth_axis)
-        uv = np.clip([rel @ self.right / self.half, rel @ self.up / self.half], -1.0, 1.0)
+        uv = np.clip([rel @ self.right / self.half_uv[0], rel @ self.up / self.half_uv[1]],
+                     -1.0, 1.0)
         self._quiet = True
         try:
             self.pad.uv = [float(uv[0]), float(uv[1])]
@@ -156,3 +166,19 @@ class ViewPlaneDrag:
     def _moved(self, change: dict[str, Any]) -> None:
         if not self._quiet:
             self._on_drag(self.position(change["new"]))
+
+
+def fit_in_box(right: ArrayLike, up: ArrayLike, box: ArrayLike) -> Array:
+    """Half-sides ``(a, b)`` of the largest rectangle ``c + a u right + b v up`` (``|u|, |v|
+    <= 1``) inside the box ``c ± box`` that keeps the proportions of the box's outline seen
+    along ``right x up``: a corner of the pad reaches a face of the box (a slider's limit),
+    and its middle is the box's middle. Seen along a world axis, it is the box's face."""
+    r, s = (np.abs(np.asarray(a, dtype=np.float64).reshape(3)) for a in (right, up))
+    b = np.asarray(box, dtype=np.float64).reshape(3)
+    if not np.all(b > 0):
+        raise ValueError(f"box must have positive half-extents, got {box!r}")
+    outline = np.array([r @ b, s @ b])  # the box's outline in the pad's plane
+    reach = outline[0] * r + outline[1] * s  # how far its corners go along each axis
+    scale = min(1.0, float(np.min(b[reach > 1e-12] / reach[reach > 1e-12])))
+    out: Array = scale * outline
+    return out
