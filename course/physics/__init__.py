@@ -12,7 +12,16 @@ A rigid body (numpy only; ``docs/physics.md``)::
     body = box(1.0, [0.1, 0.05, 0.075])
     run = simulate_rigid(body, body.state(x=[0, 0.3, 0]), h=1e-3, n_steps=2000,
                          ground=Ground(k=1e4, d=40, friction=5))
+
+A simulated character on MuJoCo (``pip install 'course-kinematics[physics]'``; mujoco is
+imported only when one of these names is first used, ``docs/physics.md``)::
+
+    from course.physics import build_model, track
+    character = build_model(motion.skeleton)
+    result = track(character, motion, kp=1000, kd=6, hold_root=True)
 """
+
+from typing import Any
 
 from .cloth import BEND, SHEAR, STRUCTURAL, Cloth, grid_cloth
 from .mass_spring import (
@@ -60,7 +69,33 @@ from .rigid_body import (
     world_inertia,
 )
 
+#: Names served lazily from course.physics.character (which imports mujoco on first use).
+_CHARACTER = (
+    "CMU_SCALE",
+    "Character",
+    "TrackingResult",
+    "build_model",
+    "effective_inertia",
+    "guess_scale",
+    "motion_from_qpos",
+    "qpos_from_motion",
+    "qvel_from_motion",
+    "set_state",
+    "track",
+    "tracking_error_cm",
+)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _CHARACTER:
+        from . import character
+
+        return getattr(character, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 __all__ = [
+    *_CHARACTER,
     "BEND",
     "GRAVITY",
     "INTEGRATORS",
