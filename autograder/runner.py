@@ -113,7 +113,8 @@ def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared,
             catalogue = assignment.misconceptions_of(fn.name)
             tr.cases = [judge(fn, c, e, o, sandbox.memory_mb, source.locate, catalogue)
                         for c, e, o in zip(p.cases, p.expected, outcomes, strict=True)]
-            tr.misconception = diagnose(assignment, fn, tr.cases)
+            tr.misconception = (_callee_mistake(assignment, fn, tr.cases, sandbox)
+                                or diagnose(assignment, fn, tr.cases))
             tr.elapsed = time.monotonic() - started_at
         result.output = sandbox.output()
 
@@ -181,6 +182,33 @@ def _error_text(error: dict[str, Any], locate: Callable[[int], str]) -> str:
     return text
 
 
+def _callee_mistake(assignment: Assignment, fn: Function, cases: list[CaseResult],
+                    sandbox: Sandbox) -> Misconception | None:
+    """The catalogued mistake ``caused_by`` a function ``fn`` uses, if the student's own
+    callee, called with the arguments ``fn`` would give it on the failing cases, is wrong on
+    one of them (raises, or differs from its reference)."""
+    failing = [c for c in cases if not c.passed and c.kind != "not_implemented"]
+    if not failing:
+        return None
+    for use in fn.uses:
+        mistake = next((m for m in assignment.misconceptions_of(fn.name)
+                        if m.caused_by == use.name), None)
+        if mistake is None or use.name in sandbox.missing:
+            continue
+        callee = assignment.function(use.name)
+        args = [use.args(*c.case.args) for c in failing]
+        for a, out in zip(args, sandbox.call(use.name, args), strict=True):
+            if out.status == "error":
+                return mistake
+            if out.status != "ok" or out.value is None:
+                continue
+            expected = callee.reference(*a)
+            v = callee.check.validate(callee.name, out.value, expected)
+            if v.error or callee.check.judge(v.array, expected, a) is not None:
+                return mistake
+    return None
+
+
 def diagnose(assignment: Assignment, fn: Function,
              cases: list[CaseResult]) -> Misconception | None:
     """The first catalogued mistake that reproduces (or shows the symptom of) every failing
@@ -200,13 +228,15 @@ def diagnose(assignment: Assignment, fn: Function,
 
 
 def _reproduces(m: Misconception, fn: Function, c: CaseResult) -> bool:
+    if m.caused_by is not None:  # found by calling the callee (_callee_mistake), not here
+        return False
     if c.got is None:
         return c.error is not None and _explained(m, c.error, c.case) is not None
     try:
         with np.errstate(all="ignore"):
             if m.symptom is not None:
                 return bool(m.symptom(c.got, *c.case.args))
-            assert m.wrong is not None  # Misconception holds exactly one of wrong, symptom
+            assert m.wrong is not None  # Misconception holds one of wrong, symptom, caused_by
             wrong = m.wrong(*c.case.args)
     except Exception:  # a variant undefined on this input reproduces nothing
         return False

@@ -11,7 +11,9 @@ An assignment module (``autograder/assignments/a1.py``) builds one :class:`Assig
   written as a function of the reference, which the diagnosis compares failing outputs to,
   or, where a mistake has no single wrong output (an iterative solver), a *symptom*: a
   predicate on the failing output and the call's arguments; a mistake that makes some
-  inputs raise (an inverse of a singular matrix) may also *explain* those errors;
+  inputs raise (an inverse of a singular matrix) may also *explain* those errors; a
+  mistake *caused by* another function the template asks this one to call (:class:`Uses`)
+  is found by calling the student's own callee on the failing cases' arguments;
 * optionally, per function, a :class:`Picture` of a failing case (skeletons, chains).
 
 Nothing here runs student code; the runner does, in a sandbox.
@@ -54,13 +56,24 @@ class Picture:
 
 
 @dataclass(frozen=True)
+class Uses:
+    """The template asks a function to call the student's ``name``, with the arguments
+    ``args(*case_args)`` built from its own (``ik_local`` walks ``path_to(parents, fixed,
+    effector)``): a wrong callee explains the caller's failures."""
+
+    name: str
+    args: Callable[..., tuple[Any, ...]]
+
+
+@dataclass(frozen=True)
 class Function:
     """A function the student implements.
 
     ``params`` are the argument names, in order (for messages); ``reference`` computes the
     expected output from the same arguments; ``check`` validates and compares outputs;
     ``picture(got, expected, args)`` draws a failing case, or returns None; ``timeout_hint``
-    is added to the message of a case that ran out of time (the likely cause, and the fix).
+    is added to the message of a case that ran out of time (the likely cause, and the fix);
+    ``uses`` names the student's functions it is meant to call.
     """
 
     name: str
@@ -69,6 +82,7 @@ class Function:
     check: Check
     picture: Callable[..., Picture | None] | None = None
     timeout_hint: str | None = None
+    uses: tuple[Uses, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -111,7 +125,8 @@ class Misconception:
     recognises it (the root moved, the bone lengths came out reversed, ...). A mistake that
     makes some inputs raise may say so: ``explains(error, *args)`` returns, for the error a
     case raised (type, message), a sentence on what happened, or None if this mistake does
-    not explain it.
+    not explain it. ``caused_by`` names instead a function of :attr:`Function.uses` whose
+    wrong answers, on the failing cases' own arguments, explain this function's failures.
     """
 
     key: str
@@ -121,10 +136,13 @@ class Misconception:
     wrong: Callable[..., Any] | None = None
     symptom: Callable[..., bool] | None = None
     explains: Callable[..., str | None] | None = None
+    caused_by: str | None = None
 
     def __post_init__(self) -> None:
-        if (self.wrong is None) == (self.symptom is None):
-            raise ValueError(f"misconception {self.key!r}: give exactly one of wrong, symptom")
+        given = [x is not None for x in (self.wrong, self.symptom, self.caused_by)]
+        if sum(given) != 1:
+            raise ValueError(f"misconception {self.key!r}: give exactly one of wrong, "
+                             "symptom, caused_by")
 
 
 @dataclass(frozen=True)

@@ -40,12 +40,17 @@ def mutants(key: str) -> list[str]:
     return sorted(p.name for p in (FIXTURES / key).glob("mutant_*.py"))
 
 
-def expectation(key: str, name: str) -> tuple[str, str]:
-    """``(function, misconception key)`` from a mutant's ``# expect:`` line."""
-    found = re.search(r"# expect: (\S+)", (FIXTURES / key / name).read_text())
+def expectations(key: str, name: str) -> list[tuple[str, str]]:
+    """``(function, misconception key)`` of each of a mutant's ``# expect:`` lines: the
+    mistake itself first, then what its callers are told (``ik_local:path_to_wrong``)."""
+    found = re.findall(r"# expect: (\S+)", (FIXTURES / key / name).read_text())
     assert found, name
-    fn, mistake = found.group(1).split(":")
-    return fn, mistake
+    return [(fn, mistake) for fn, mistake in (f.split(":") for f in found)]
+
+
+def expectation(key: str, name: str) -> tuple[str, str]:
+    """``(function, misconception key)`` of a mutant's first ``# expect:`` line."""
+    return expectations(key, name)[0]
 
 
 def one_line(result: Result) -> str:
@@ -62,12 +67,25 @@ def assert_diagnosed(result: Result, key: str, fn: str, mistake: str) -> None:
     assert f"Likely mistake, {own[0].misconception.title}" in one_line(result)
     allowed = (fn, *CALLERS.get(key, {}).get(fn, ()))
     assert all(t.test.function in allowed for t in failing), [t.test.name for t in failing]
+    for caller, told in told_callers(key, fn, mistake):
+        assert all(t.misconception and t.misconception.key == told
+                   for t in failing if t.test.function == caller), [
+            (t.test.name, t.misconception) for t in failing if t.test.function == caller]
+
+
+def told_callers(key: str, fn: str, mistake: str) -> list[tuple[str, str]]:
+    """What the callers of a mutant's function are told: its other ``# expect:`` lines."""
+    for m in mutants(key):
+        found = expectations(key, m)
+        if found[0] == (fn, mistake):
+            return found[1:]
+    return []
 
 
 def assert_catalogue_matches_fixtures(assignment, key: str) -> None:
     """Every mistake of the assignment's own catalogue has a mutant, every mutant names a
     catalogued mistake, and each shared mistake that can show here has at least one mutant."""
-    expected = {":".join(expectation(key, m)) for m in mutants(key)}
+    expected = {":".join(e) for m in mutants(key) for e in expectations(key, m)}
     own = {f"{m.function}:{m.key}" for m in assignment.misconceptions}
     assert own <= expected <= {f"{m.function}:{m.key}" for m in assignment.catalogue}
     shared = {m.key for m in assignment.shared}

@@ -184,3 +184,12 @@ def test_grade_a_class_in_parallel(tmp_path, capsys):
 def test_check_command_prints_the_report(capsys):
     assert main(["check", "a1", "--submission", str(FIXTURES / "reference.py")]) == 0
     assert "Score: 12 / 12 (visible tests)" in capsys.readouterr().out
+
+
+def test_a_mistake_is_recognised_one_way_only():
+    from autograder.spec import Misconception
+
+    with pytest.raises(ValueError, match="exactly one of wrong, symptom, caused_by"):
+        Misconception("k", "f", "t", "e", symptom=lambda *a: True, caused_by="g")
+    with pytest.raises(ValueError, match="exactly one"):
+        Misconception("k", "f", "t", "e")

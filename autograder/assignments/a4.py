@@ -36,7 +36,7 @@ from course.skeleton import Skeleton
 
 from ..catalogue import pivot_mistakes
 from ..checks import IndexCheck, QuatCheck, show
-from ..spec import Assignment, Case, Function, Misconception, Picture, Test
+from ..spec import Assignment, Case, Function, Misconception, Picture, Test, Uses
 
 REACH_TOL = 1e-3  # times the path's length: how far the end effector may stop from the target
 HOLD_TOL = 1e-6  # times the path's length (or radians): how far the fixed joint may move
@@ -710,6 +710,13 @@ MISCONCEPTIONS = (
         symptom=_world_returned),
     *pivot_mistakes("ik_local", {"wrong_joint": _wrong_joint}),
     Misconception(
+        "path_to_wrong", "ik_local", "the wrong path from your path_to, walked by ik_local",
+        "ik_local turns the joints on path_to(parents, fixed, effector), and for these cases "
+        "your path_to returns a wrong path (its own tests above say how): the joints turned, "
+        "or the order they are turned in, come out wrong with it. Fix path_to first and check "
+        "again; whatever ik_local still gets wrong will then show here.",
+        caused_by="path_to"),
+    Misconception(
         "root_moved", "ik_local", "joint 0 held in place, not the fixed joint",
         "With a foot as the fixed joint the body turns about the foot: a turn of an edge on "
         "the foot's side (Q_p = Q_c R_c^{-1}, p_p = p_c - Q_p l_c) moves everything beyond it, "
@@ -794,7 +801,8 @@ _FUNCTIONS = (
     Function("path_to", ("parents", "start", "end"), path_reference, IndexCheck(noun="joint")),
     Function("ik_local", ("parents", "offsets", "local_quats", "root_position", "fixed",
                           "effector", "target", "iterations"), _solve_reference, IKLocalCheck(),
-             ik_picture),
+             ik_picture, uses=(Uses("path_to", lambda parents, offsets, quats, root, fixed,
+                                    effector, target, iterations: (parents, fixed, effector)),)),
     Function("retarget_rest", ("parents", "offsets_from", "offsets_to", "local_quats"),
              lambda *args: np.array(retarget_rest(*args)), RetargetCheck(), retarget_picture),
 )
