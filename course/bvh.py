@@ -29,7 +29,7 @@ from __future__ import annotations
 import os
 import re
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -97,7 +97,8 @@ class BVHError(ValueError):
         where = path if line is None else f"{path}, line {line}"
         super().__init__(f"{where}: {problem}")
 
-    def __reduce__(self):  # keep path and line across pickling (worker processes)
+    def __reduce__(self) -> tuple[type[BVHError], tuple[str, str, int | None]]:
+        # keep path and line across pickling (worker processes)
         return type(self), (self.problem, self.path, self.line)
 
 
@@ -181,11 +182,11 @@ def _parse(text: str, source: str, name: str) -> tuple[Motion, list[str]]:
     lines = _lines(text)
     joints, motion_at = _parse_hierarchy(lines, source)
     n_frames, frame_time, data_at = _parse_motion_header(lines, motion_at, source)
-    channels = tuple(j.channels for j in joints)
+    channels = tuple(j.channels or () for j in joints)
     n_channels = sum(len(c) for c in channels)
     values = _parse_frames(lines, data_at, n_frames, n_channels, source, quirks)
     offsets = np.array([j.offset for j in joints], dtype=np.float64)
-    types = [joint_type(j.channels) for j in joints]
+    types = [joint_type(c) for c in channels]
     skeleton = Skeleton([j.name for j in joints], [j.parent for j in joints], offsets, types)
     rotations, root_positions, translations = _pose_from_channels(values, channels, offsets)
     motion = Motion(
@@ -260,6 +261,10 @@ class _Joint:
     end_site: bool = False
     offset: tuple[float, float, float] | None = None
     channels: tuple[str, ...] | None = None
+
+
+#: Builds the error of a problem at a line index (of :func:`_parse_hierarchy`).
+_Fail = Callable[[str, int], BVHError]
 
 
 # One pass of a line-by-line state machine, each keyword a few lines with its own error.
@@ -379,28 +384,30 @@ def _parse_hierarchy(lines: Sequence[str], source: str) -> tuple[list[_Joint], i
     raise fail("missing MOTION section after the HIERARCHY", last)
 
 
-def _open_joint(joints: list[_Joint], stack: list[int], keyword: str, fail, at: int) -> _Joint:
+def _open_joint(
+    joints: list[_Joint], stack: list[int], keyword: str, fail: _Fail, at: int
+) -> _Joint:
     if not stack:
         raise fail(f"{keyword} outside any joint's braces", at)
     return joints[stack[-1]]
 
 
-def _offset(args: list[str], joint: str, fail, at: int) -> tuple[float, float, float]:
+def _offset(args: list[str], joint: str, fail: _Fail, at: int) -> tuple[float, float, float]:
     if len(args) != 3:
         raise fail(f"OFFSET of joint {joint!r} needs 3 numbers, found {len(args)}", at)
-    x, y, z = (_number(a) for a in args)
-    bad = next((a for a, v in zip(args, (x, y, z), strict=True) if v is None), None)
+    bad = next((a for a in args if _number(a) is None), None)
     if bad is not None:
         raise fail(
             f"OFFSET of joint {joint!r} is not three numbers: {' '.join(args)!r} "
             f"({_not_a_number(bad)})", at
         )
+    x, y, z = (float(a) for a in args)
     if not np.all(np.isfinite([x, y, z])):
         raise fail(f"OFFSET of joint {joint!r} is not finite: {' '.join(args)!r}", at)
     return x, y, z
 
 
-def _channels(args: list[str], joint: str, fail, at: int) -> tuple[str, ...]:
+def _channels(args: list[str], joint: str, fail: _Fail, at: int) -> tuple[str, ...]:
     if not args:
         raise fail(f"CHANNELS of joint {joint!r} needs a channel count", at)
     if not _COUNT.fullmatch(args[0]):
@@ -658,7 +665,7 @@ def format_bvh_channels(
     n_channels = sum(len(channels[j]) for j in order)
     if values.ndim != 2 or values.shape[1] != n_channels:
         raise ValueError(f"values: expected shape (F, {n_channels}), got {values.shape}")
-    depth = {}
+    depth: dict[int, int] = {}
     lines = ["HIERARCHY"]
     open_blocks: list[int] = []
     for j in order:

@@ -101,7 +101,8 @@ class Motion:
     frame_time : float
         Seconds between frames (BVH ``Frame Time``), at least :data:`MIN_FRAME_TIME`.
     channels : sequence of tuple of str, optional
-        Per joint, its BVH channel names in file order. Default: :func:`default_channels`.
+        Per joint, its BVH channel names in file order. Default (empty, or None):
+        :func:`default_channels`.
     translations : array_like, shape (F, J, 3), optional
         Per-frame bones :math:`l_i(t)` for clips with position channels on non-root joints;
         rows of joints without position channels equal their offsets (the root's row, unused
@@ -125,7 +126,7 @@ class Motion:
     local_rotations: Array
     root_positions: Array
     frame_time: float
-    channels: tuple[tuple[str, ...], ...] | None = None
+    channels: tuple[tuple[str, ...], ...] = ()
     translations: Array | None = None
     name: str = ""
     source: str | None = field(default=None)
@@ -153,7 +154,7 @@ class Motion:
                     f"local_rotations has {n_frames}"
                 )
         self.frame_time = _seconds(self.frame_time)
-        if self.channels is None:
+        if not self.channels:  # None too, as callers may pass
             self.channels = default_channels(self.skeleton)
         self.channels = _checked_channels(self.channels, self.skeleton)
 
@@ -162,7 +163,7 @@ class Motion:
     @property
     def n_frames(self) -> int:
         """Number of frames ``F``."""
-        return self.local_rotations.shape[0]
+        return int(self.local_rotations.shape[0])
 
     @property
     def n_joints(self) -> int:
@@ -182,7 +183,7 @@ class Motion:
     @property
     def times(self) -> Array:
         """Time of each frame in seconds, shape (F,)."""
-        return np.arange(self.n_frames) * self.frame_time
+        return np.arange(self.n_frames, dtype=np.float64) * self.frame_time
 
     @property
     def euler_orders(self) -> tuple[str | None, ...]:

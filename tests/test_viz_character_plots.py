@@ -10,7 +10,7 @@ from course.foot_sliding import foot_sliding
 from course.motion import Motion
 from course.skeleton import Skeleton
 from course.viz import character_plots as cp
-from course.viz.figures import _bone_xy
+from course.viz.figures import bone_xy
 
 ARM = Skeleton(["root", "a", "b", "c"], [-1, 0, 1, 1],
                [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 2.0]])
@@ -41,8 +41,8 @@ def test_pose_panels_draw_each_layer_as_its_bones_in_the_plane():
                          labels=["wanted", "made"], plane="zy", xlim=(-5.0, 5.0))
     assert [ax.get_title() for ax in fig.axes] == ["one", "two"]
     ghost, made = fig.axes[0].lines
-    np.testing.assert_array_equal(xy(ghost), _bone_xy(ARM.parents, rest[:, [2, 1]]))
-    np.testing.assert_array_equal(xy(made), _bone_xy(ARM.parents, moved[:, [2, 1]]))
+    np.testing.assert_array_equal(xy(ghost), bone_xy(ARM.parents, rest[:, [2, 1]]))
+    np.testing.assert_array_equal(xy(made), bone_xy(ARM.parents, moved[:, [2, 1]]))
     assert to_hex(ghost.get_color()) == cp.GHOST and ghost.get_linewidth() == 6.0
     assert to_hex(made.get_color()) == cp.BONE and made.get_linewidth() == 2.5
     assert legend_texts(fig.axes[0]) == ["wanted", "made"] and fig.axes[1].get_legend() is None

@@ -15,7 +15,7 @@ import course.ik as ik  # noqa: E402
 import course.rotations as rot  # noqa: E402
 from course.skeleton import chain  # noqa: E402
 from course.viz import jacobian_plots as plots  # noqa: E402
-from course.viz.figures import METHOD_COLORS, _mpl3  # noqa: E402
+from course.viz.figures import METHOD_COLORS, mpl3  # noqa: E402
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -194,7 +194,7 @@ def test_word_figure_traces_the_end_effector():
     assert len(fig.axes) == 2
     ax = fig.axes[0]
     traced = next(ln for ln in ax.lines if ln.get_color() == METHOD_COLORS[0])
-    assert np.allclose(np.array(traced.get_data_3d()), np.array(_mpl3(frames[:, -1])))
+    assert np.allclose(np.array(traced.get_data_3d()), np.array(mpl3(frames[:, -1])))
     assert ax.get_title() == "dls\n2.0 iterations / frame"
     strokes = [ln for ln in ax.lines if ln.get_linestyle() in ("-", ":") and ln.get_lw() != 1.5]
     assert [ln.get_linestyle() for ln in strokes[:2]] == ["-", ":"]     # pen lifted on 1

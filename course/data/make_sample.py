@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._typing import Array
 from ..bvh import format_bvh_channels
 from ..motion import default_channels
 from ..skeleton import Skeleton
@@ -84,7 +85,7 @@ def wave_channel_values(n_frames: int = round(SECONDS * FPS)) -> np.ndarray:
     tilt = -np.arcsin(shift / leg)
     zeros = np.zeros_like(t)
 
-    def zyx(z=zeros, y=zeros, x=zeros):
+    def zyx(z: Array = zeros, y: Array = zeros, x: Array = zeros) -> list[Array]:
         return [z, y, x]
 
     tilt_deg = np.degrees(tilt)

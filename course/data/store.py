@@ -173,6 +173,8 @@ def _check(file: Path, clip: Clip, what: str) -> None:
 def _derive(clip: Clip, source: Path, target: Path) -> Path:
     """Cut data frames ``clip.frame_range`` of ``source`` into ``target`` (header kept, the
     ``Frames:`` count changed, line endings as in the source) and check the result."""
+    if clip.frame_range is None:
+        raise ValueError(f"clip {clip.name!r}: no frame_range to cut")
     start, stop = clip.frame_range
     lines = source.read_bytes().splitlines(keepends=True)
     at = next(i for i, line in enumerate(lines) if line.lstrip().startswith(b"Frames:"))

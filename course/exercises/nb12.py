@@ -18,7 +18,7 @@ def spring_force(x_i: np.ndarray, x_j: np.ndarray, k: float, L: float) -> np.nda
     :math:`f_i = -\nabla_{x_i} U = -k\,(1 - L/\lVert d\rVert)\,d`, :math:`d = x_i - x_j`
     (:meth:`~course.physics.SpringSystem.forces` without gravity)."""
     system = SpringSystem.create([1.0, 1.0], [[0, 1]], [L], k, gravity=(0.0, 0.0, 0.0))
-    return system.forces(np.stack([x_i, x_j]))[0]
+    return np.asarray(system.forces(np.stack([x_i, x_j]))[0])
 
 
 def symplectic_step(x: np.ndarray, v: np.ndarray, f: np.ndarray, m: float,

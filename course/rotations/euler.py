@@ -39,6 +39,8 @@ dimensions.
 
 from __future__ import annotations
 
+from typing import Literal, overload
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -160,6 +162,30 @@ def quat_from_euler(angles: ArrayLike, order: str, degrees: bool = False) -> Arr
     mul = _kernels.quat_mul
     q = mul(mul(qs[0], qs[1]), qs[2]) if intrinsic else mul(mul(qs[2], qs[1]), qs[0])
     return _kernels.quat_canonical(q)
+
+
+@overload
+def euler_from_quat(
+    q: ArrayLike, order: str, degrees: bool = ..., return_gimbal_lock: Literal[False] = ...
+) -> Array: ...
+
+
+@overload
+def euler_from_quat(
+    q: ArrayLike, order: str, degrees: bool, return_gimbal_lock: Literal[True]
+) -> tuple[Array, BoolArray]: ...
+
+
+@overload
+def euler_from_quat(
+    q: ArrayLike, order: str, degrees: bool = ..., *, return_gimbal_lock: Literal[True]
+) -> tuple[Array, BoolArray]: ...
+
+
+@overload
+def euler_from_quat(
+    q: ArrayLike, order: str, degrees: bool = ..., return_gimbal_lock: bool = ...
+) -> Array | tuple[Array, BoolArray]: ...
 
 
 def euler_from_quat(

@@ -21,7 +21,7 @@ from matplotlib.patches import Arc, Circle, Rectangle, Wedge
 from numpy.typing import ArrayLike
 
 from .._typing import Array
-from .figures import _PLANES, BONE, GHOST, JOINT, METHOD_COLORS, TARGET, TRAIL, _bone_xy, _mpl3
+from .figures import BONE, GHOST, JOINT, METHOD_COLORS, PLANES, TARGET, TRAIL, bone_xy, mpl3
 
 GREEN = "#2bb673"
 ORANGE = "#f08c3a"
@@ -45,7 +45,7 @@ class ChainFigure(Figure):
         return buffer.getvalue()
 
 
-def _style(ax: Any) -> None:
+def style_axes(ax: Any) -> None:
     ax.grid(True, color="#e3e7ec", lw=0.8)
     ax.set_axisbelow(True)
     for side in ("top", "right"):
@@ -77,7 +77,7 @@ def panels(
         share = axes[0] if sharey and axes else None
         ax = fig.add_subplot(grid[k // ncols, k % ncols], projection=projection, sharey=share)
         if projection is None:
-            _style(ax)
+            style_axes(ax)
             if xlim is not None and ylim is not None:
                 ax.set(aspect="equal", xlim=xlim, ylim=ylim)
         axes.append(ax)
@@ -86,12 +86,12 @@ def panels(
 
 def _xy(points: ArrayLike, plane: str = "xy", name: str = "points") -> Array:
     """Points ``(..., 2)`` or ``(..., 3)`` as plane coordinates ``(..., 2)``."""
-    if plane not in _PLANES:
-        raise ValueError(f"plane must be one of {tuple(_PLANES)}, got {plane!r}")
+    if plane not in PLANES:
+        raise ValueError(f"plane must be one of {tuple(PLANES)}, got {plane!r}")
     p = np.asarray(points, dtype=np.float64)
     if p.ndim == 0 or p.shape[-1] not in (2, 3):
         raise ValueError(f"{name} must have shape (..., 2) or (..., 3), got {p.shape}")
-    return p if p.shape[-1] == 2 else p[..., list(_PLANES[plane])]
+    return p if p.shape[-1] == 2 else p[..., list(PLANES[plane])]
 
 
 def draw_chain(
@@ -127,7 +127,7 @@ def draw_chain(
         par = np.asarray(parents, dtype=np.intp)
         if par.shape != (len(p),):
             raise ValueError(f"parents must have shape ({len(p)},), got {par.shape}")
-        bones = _bone_xy(par, p)
+        bones = bone_xy(par, p)
     lines = ax.plot(bones[:, 0], bones[:, 1], "-", color=color, lw=lw, alpha=alpha,
                     solid_capstyle="round", label=label, zorder=3)
     if joints:
@@ -479,21 +479,21 @@ def pole_figure(
                          f"{poles_.shape}")
     t = np.asarray(target, dtype=np.float64)
     axis = t - legs_[0, 0]
-    view = np.stack(_mpl3(-axis / np.linalg.norm(axis)))  # down the root -> target axis
+    view = np.stack(mpl3(-axis / np.linalg.norm(axis)))  # down the root -> target axis
     down = (float(np.degrees(np.arcsin(view[2]))), float(np.degrees(np.arctan2(view[1], view[0]))))
     fig, axes = panels(2, figsize=(11, 5.4), projection="3d")
     tab10 = colormaps["tab10"]
     for ax, (elev, azim), title in zip(axes, [(14.0, -60.0), down],
                                        [f"{len(legs_)} poles, {len(legs_)} knees",
                                         "looking down the hip–target axis"], strict=True):
-        ax.plot(*_mpl3(circle), color=GHOST, lw=1.5, ls="--")
-        ax.plot(*_mpl3(np.stack([legs_[0, 0], t])), color=MUTED, lw=1, ls=":")
+        ax.plot(*mpl3(circle), color=GHOST, lw=1.5, ls="--")
+        ax.plot(*mpl3(np.stack([legs_[0, 0], t])), color=MUTED, lw=1, ls=":")
         for k, (leg, pole) in enumerate(zip(legs_, poles_, strict=True)):
             color = tab10(k if k < 7 else k + 1)  # skip tab10's grey
-            ax.plot(*_mpl3(leg), "-o", color=color, lw=3.5, ms=5, mfc=JOINT, mec=JOINT_EDGE)
-            ax.plot(*_mpl3(pole), "D", color=color, ms=6)
-            ax.plot(*_mpl3(np.stack([leg[1], pole])), color=color, lw=0.8, ls="--")
-        ax.plot(*_mpl3(t), "*", color=TARGET, ms=16)
+            ax.plot(*mpl3(leg), "-o", color=color, lw=3.5, ms=5, mfc=JOINT, mec=JOINT_EDGE)
+            ax.plot(*mpl3(pole), "D", color=color, ms=6)
+            ax.plot(*mpl3(np.stack([leg[1], pole])), color=color, lw=0.8, ls="--")
+        ax.plot(*mpl3(t), "*", color=TARGET, ms=16)
         ax.set(xlabel="z", ylabel="x", zlabel="y", title=title, xticklabels=[], yticklabels=[],
                zticklabels=[], xlim=(-lim, lim), ylim=(-lim, lim), zlim=height)
         ax.set_box_aspect((1, 1, 1))
@@ -633,14 +633,14 @@ def tracking_figure(
         th, poses = np.degrees(np.asarray(track[0], dtype=np.float64)), track[1]
         color = _method_color(method, k)
         top = fig.add_subplot(grid[0, k])
-        _style(top)
+        style_axes(top)
         draw_path(top, path, color=MUTED, lw=1)
         for pose in np.asarray(poses, dtype=np.float64)[::every]:
             top.plot(*_xy(pose).T, "-", color=color, lw=1.2, alpha=0.35)
         top.set(aspect="equal", xlim=xlim, ylim=ylim, title=f"{method.upper()}: every "
                 f"{every}th frame")
         bottom = fig.add_subplot(grid[1, k])
-        _style(bottom)
+        style_axes(bottom)
         for j in range(th.shape[1]):
             bottom.plot(th[:, j], lw=1.6, label=names[j])
         change = np.abs(np.diff(th, axis=0)).sum(1).mean()

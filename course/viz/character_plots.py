@@ -21,7 +21,7 @@ from ..foot_sliding import FootSliding
 from ..motion import Motion
 from ..skeleton import Skeleton
 from .chain_plots import GREEN, ChainFigure, draw_chain, panels
-from .figures import _PLANES, BONE, GHOST, JOINT, TARGET
+from .figures import BONE, GHOST, JOINT, PLANES, TARGET
 
 HIGHLIGHT = "#ffe8a3"  # the span of a cross-fade
 
@@ -62,8 +62,8 @@ def pose_panels(
     if len(n_layers) != 1 or 0 in n_layers:
         raise ValueError(f"panels_: expected the same number (> 0) of layers in every panel, "
                          f"got {sorted(n_layers)}")
-    if plane not in _PLANES:
-        raise ValueError(f"plane: expected one of {sorted(_PLANES)}, got {plane!r}")
+    if plane not in PLANES:
+        raise ValueError(f"plane: expected one of {sorted(PLANES)}, got {plane!r}")
     (n,) = n_layers
     if labels is not None and len(labels) != n:
         raise ValueError(f"labels: expected one per layer ({n}), got {len(labels)}")
@@ -71,7 +71,7 @@ def pose_panels(
     widths = widths or ((3.0,) if n == 1 else (6.0,) + (2.5,) * (n - 1))
     fig, axs = panels(len(panels_), sharey=True,
                       figsize=(panel_size[0] * len(panels_) + 1.0, panel_size[1]))
-    a, b = ("xyz"[k] for k in _PLANES[plane])
+    a, b = ("xyz"[k] for k in PLANES[plane])
     for k, (ax, (title, layers)) in enumerate(zip(axs, panels_.items(), strict=True)):
         for i, (skeleton, positions) in enumerate(layers):
             p = np.asarray(positions, dtype=np.float64)

@@ -28,10 +28,10 @@ TARGET = "#e5484d"
 TRAIL = "#d1347a"
 AXIS_RGB = ("#e63946", "#2aaa52", "#2c6ee6")
 METHOD_COLORS = ("#3d7dca", "#e5484d", "#2bb673", "#8e6bd8", "#f08c3a", "#4a5561")
-_PLANES = {"xy": (0, 1), "zy": (2, 1), "xz": (0, 2)}
+PLANES = {"xy": (0, 1), "zy": (2, 1), "xz": (0, 2)}
 
 
-def _figure(figsize: tuple[float, float], dpi: int = 100) -> Figure:
+def agg_figure(figsize: tuple[float, float], dpi: int = 100) -> Figure:
     """A figure outside pyplot (no inline double display, no leak in loops), drawn by Agg;
     it still displays in a notebook cell through its PNG repr."""
     fig = Figure(figsize=figsize, dpi=dpi, layout="constrained")
@@ -39,12 +39,20 @@ def _figure(figsize: tuple[float, float], dpi: int = 100) -> Figure:
     return fig
 
 
+def agg_canvas(fig: Figure) -> FigureCanvasAgg:
+    """The Agg canvas of a figure made by :func:`agg_figure` (its pixel buffer, its blits)."""
+    canvas = fig.canvas
+    if not isinstance(canvas, FigureCanvasAgg):
+        raise TypeError(f"expected a figure drawn by Agg, got {type(canvas).__name__}")
+    return canvas
+
+
 def figure_png(fig: Figure) -> bytes:
     """The figure's current canvas buffer as PNG bytes (no redraw)."""
-    return png_bytes(np.asarray(fig.canvas.buffer_rgba()))
+    return png_bytes(np.asarray(agg_canvas(fig).buffer_rgba()))
 
 
-class _Blitter:
+class Blitter:
     """A figure's static part rendered once and cached; the moving artists (created with
     ``animated=True``, so a full draw skips them) are drawn over it on every update. In 3D
     this holds while the view stays put: the projection is computed by the cached draw."""
@@ -56,12 +64,13 @@ class _Blitter:
 
     def full_redraw(self) -> None:
         """Render the static part and cache it (again after a change of limits or titles)."""
-        self.figure.canvas.draw()
-        self._background = self.figure.canvas.copy_from_bbox(self.figure.bbox)
+        canvas = agg_canvas(self.figure)
+        canvas.draw()
+        self._background = canvas.copy_from_bbox(self.figure.bbox)
         self.blit()
 
     def blit(self) -> None:
-        canvas = self.figure.canvas
+        canvas = agg_canvas(self.figure)
         if self._background is None:
             self.full_redraw()
             return
@@ -71,7 +80,7 @@ class _Blitter:
         canvas.blit(self.figure.bbox)
 
 
-def _mpl3(p: ArrayLike) -> tuple[Array, Array, Array]:
+def mpl3(p: ArrayLike) -> tuple[Array, Array, Array]:
     """World (x, y, z), y up, as matplotlib's (X, Y, Z), Z up: X = z, Y = x, Z = y. A cyclic
     permutation, so right-handed frames stay right-handed on screen."""
     p = np.asarray(p, dtype=np.float64)
@@ -84,7 +93,7 @@ def _label_3d(ax: Any) -> None:
     ax.set_zlabel("y")
 
 
-def _bone_xy(parents: NDArray[np.intp], pos: Array) -> Array:
+def bone_xy(parents: NDArray[np.intp], pos: Array) -> Array:
     """Bone segments as one NaN-separated polyline: ``(3 (J-1), dims)``."""
     seg = np.full((3 * (len(parents) - 1), pos.shape[1]), np.nan)
     seg[0::3] = pos[parents[1:]]
@@ -120,15 +129,15 @@ class ChainPlot:
     ) -> None:
         if dims not in (2, 3):
             raise ValueError(f"dims must be 2 or 3, got {dims}")
-        if plane not in _PLANES:
-            raise ValueError(f"plane must be one of {tuple(_PLANES)}, got {plane!r}")
+        if plane not in PLANES:
+            raise ValueError(f"plane must be one of {tuple(PLANES)}, got {plane!r}")
         self.parents = np.asarray(parents, dtype=np.intp)
         self.dims, self.plane = dims, plane
         pos = self._project(positions)
         bones = np.linalg.norm(pos[1:] - pos[self.parents[1:]], axis=1)
         half = float(reach if reach is not None else max(bones.sum(), 1e-6)) * 1.08
         if ax is None:
-            self.figure = _figure(figsize)
+            self.figure = agg_figure(figsize)
             ax = self.figure.add_subplot(projection="3d" if dims == 3 else None)
         else:
             self.figure = ax.figure
@@ -148,9 +157,9 @@ class ChainPlot:
             _label_3d(ax)
             ax.view_init(elev=18, azim=35)
         if ghost:
-            self._line(_bone_xy(self.parents, pos), color=GHOST, lw=3, zorder=1)
+            self._line(bone_xy(self.parents, pos), color=GHOST, lw=3, zorder=1)
         # the moving artists: drawn only by draw_artist (animated), never by a full draw
-        self.bones = self._line(_bone_xy(self.parents, pos), color=BONE, lw=3.5, animated=True,
+        self.bones = self._line(bone_xy(self.parents, pos), color=BONE, lw=3.5, animated=True,
                                 solid_capstyle="round", zorder=3)
         self.joints = self._line(pos, ls="none", marker="o", ms=8, mfc=JOINT, mec="#7a5600",
                                  mew=0.8, animated=True, zorder=4)
@@ -160,7 +169,7 @@ class ChainPlot:
                                 animated=True, zorder=2)
         self._trail_pts: list[Array] = []
         self.positions = pos
-        self._blitter = _Blitter(self.figure, (self.trail, self.bones, self.joints, self.target))
+        self._blitter = Blitter(self.figure, (self.trail, self.bones, self.joints, self.target))
         self.full_redraw()
 
     def _project(self, positions: ArrayLike) -> Array:
@@ -168,7 +177,7 @@ class ChainPlot:
         if p.ndim != 2 or p.shape[0] != self.parents.size or p.shape[1] not in (2, 3):
             raise ValueError(f"positions must have shape ({self.parents.size}, 3), got {p.shape}")
         if self.dims == 2:
-            return p[:, list(_PLANES[self.plane])] if p.shape[1] == 3 else p
+            return p[:, list(PLANES[self.plane])] if p.shape[1] == 3 else p
         if p.shape[1] != 3:
             raise ValueError("positions must be 3D for dims=3")
         return p[:, [2, 0, 1]]
@@ -201,11 +210,11 @@ class ChainPlot:
         effector (last joint) to the trail."""
         pos = self._project(positions)
         self.positions = pos
-        self._set(self.bones, _bone_xy(self.parents, pos))
+        self._set(self.bones, bone_xy(self.parents, pos))
         self._set(self.joints, pos)
         if target is not None:
             t = np.asarray(target, dtype=np.float64).reshape(-1, 3)
-            self._set(self.target, t[:, list(_PLANES[self.plane])] if self.dims == 2
+            self._set(self.target, t[:, list(PLANES[self.plane])] if self.dims == 2
                       else t[:, [2, 0, 1]])
         if trail:
             self._trail_pts.append(pos[-1])
@@ -223,7 +232,7 @@ class ChainPlot:
 
     def image(self) -> NDArray[np.uint8]:
         """The current picture ``(H, W, 4)`` uint8."""
-        return np.asarray(self.figure.canvas.buffer_rgba()).copy()
+        return np.array(agg_canvas(self.figure).buffer_rgba(), dtype=np.uint8)
 
     def png(self) -> bytes:
         return figure_png(self.figure)
@@ -244,7 +253,7 @@ def convergence_plot(
     tol : draw the tolerance as a dashed line.
     """
     if ax is None:
-        ax = _figure((5.5, 3.6)).add_subplot()
+        ax = agg_figure((5.5, 3.6)).add_subplot()
     floor = np.finfo(float).eps
     for i, (method, r) in enumerate(residuals.items()):
         r = np.asarray(r, dtype=np.float64).reshape(-1)
@@ -276,7 +285,7 @@ class ConvergenceFigure:
     """
 
     def __init__(self, *, figsize: tuple[float, float] = (4.6, 3.0)) -> None:
-        self.figure = _figure(figsize)
+        self.figure = agg_figure(figsize)
         self.ax = self.figure.add_subplot()
         self.ax.set_yscale("log")
         self.ax.set_xlabel("iteration")
@@ -288,7 +297,7 @@ class ConvergenceFigure:
         self.label = self.ax.text(0.97, 0.95, "", transform=self.ax.transAxes, ha="right",
                                   va="top", fontsize="small", animated=True)
         self.limits: tuple[float, float, float] | None = None  # (x max, y min, y max)
-        self._blitter = _Blitter(self.figure, (self.tol_line, self.curve, self.label))
+        self._blitter = Blitter(self.figure, (self.tol_line, self.curve, self.label))
 
     def update(self, residuals: ArrayLike, tol: float, label: str = "") -> None:
         """Show ``residuals (n,)`` (iteration 0 = the start) against the tolerance ``tol``."""
@@ -330,22 +339,22 @@ def draw_frame(
     lw: float = 2.5,
 ) -> list[Any]:
     """Draw the axis triad of rotation ``R (3, 3)`` (its columns) on a 3D axes: x red, y green,
-    z blue, y up (see :func:`_mpl3`). Returns the three lines."""
+    z blue, y up (see :func:`mpl3`). Returns the three lines."""
     R = np.asarray(R, dtype=np.float64).reshape(3, 3)
     o = np.asarray(origin, dtype=np.float64)
     lines = []
     for a in range(3):
         tip = o + length * R[:, a]
-        (line,) = ax.plot(*_mpl3(np.stack([o, tip])), color=AXIS_RGB[a], lw=lw, alpha=alpha,
+        (line,) = ax.plot(*mpl3(np.stack([o, tip])), color=AXIS_RGB[a], lw=lw, alpha=alpha,
                           solid_capstyle="round")
         if labels:
-            ax.text(*_mpl3(1.08 * tip - 0.08 * o), labels[a], color=AXIS_RGB[a], alpha=alpha)
+            ax.text(*mpl3(1.08 * tip - 0.08 * o), labels[a], color=AXIS_RGB[a], alpha=alpha)
         lines.append(line)
     return lines
 
 
 def _sphere_axes(figsize: tuple[float, float] = (4.6, 4.4)) -> Any:
-    ax = _figure(figsize).add_subplot(projection="3d")
+    ax = agg_figure(figsize).add_subplot(projection="3d")
     for s in (ax.set_xlim, ax.set_ylim, ax.set_zlim):
         s(-1.05, 1.05)
     ax.set_box_aspect((1, 1, 1))
@@ -385,7 +394,7 @@ class GimbalFigure:
                       for _ in range(3)]
         self.frame = [self.ax.plot([], [], [], lw=2.5, color=c, animated=True)[0]
                       for c in AXIS_RGB]
-        self._blitter = _Blitter(self.figure, (*self.rings, *self.frame))
+        self._blitter = Blitter(self.figure, (*self.rings, *self.frame))
         self._order: str | None = None
         self.update(angles, order)
 
@@ -401,10 +410,10 @@ class GimbalFigure:
             axis = "XYZ".index(letter)
             R = R @ matrix_from_axis_angle(np.eye(3)[axis], angle)
             ring = _ring(axis, self.RADII[k]) @ R.T
-            self.rings[k].set_data_3d(*_mpl3(ring))
+            self.rings[k].set_data_3d(*mpl3(ring))
             self.rings[k].set_color(AXIS_RGB[axis])
         for axis, line in enumerate(self.frame):
-            line.set_data_3d(*_mpl3(np.stack([np.zeros(3), 0.55 * R[:, axis]])))
+            line.set_data_3d(*mpl3(np.stack([np.zeros(3), 0.55 * R[:, axis]])))
         if title != self._order:  # the title is part of the cached background
             self._order = title
             self.ax.set_title(f"gimbal rings, order {title}", fontsize="medium")
@@ -447,7 +456,7 @@ class SlerpArcFigure:
         self.methods = tuple(methods)
         self.ticks = np.linspace(0, 1, n)
         self.ax = _sphere_axes()
-        self.figure = self.ax.figure
+        self.figure: Figure = self.ax.figure
         u, v = np.mgrid[0 : 2 * np.pi : 25j, 0 : np.pi : 13j]
         self.ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v),
                                color="#dde2e8", lw=0.5)
@@ -464,7 +473,7 @@ class SlerpArcFigure:
                                              color=color, animated=animated)[0])
         self.ax.legend(loc="upper left", frameon=False)
         self.ax.set_title(f"R(t) v at t = 0, 1/{n - 1}, ..., 1", fontsize="medium")
-        self._blitter = (_Blitter(self.figure, (*self.paths, *self.marks, *self.current))
+        self._blitter = (Blitter(self.figure, (*self.paths, *self.marks, *self.current))
                          if animated else None)
         self.t = t
         self.set_rotations(q0, q1)
@@ -481,8 +490,8 @@ class SlerpArcFigure:
         self.q1 = np.asarray(q1, dtype=np.float64)
         dense = np.linspace(0, 1, 121)
         for method, path, marks in zip(self.methods, self.paths, self.marks, strict=True):
-            path.set_data_3d(*_mpl3(self._rotated(method, dense)))
-            marks.set_data_3d(*_mpl3(self._rotated(method, self.ticks)))
+            path.set_data_3d(*mpl3(self._rotated(method, dense)))
+            marks.set_data_3d(*mpl3(self._rotated(method, self.ticks)))
         self.set_t(self.t)
 
     def set_t(self, t: float | None) -> None:
@@ -491,7 +500,7 @@ class SlerpArcFigure:
         for method, marker in zip(self.methods, self.current, strict=True):
             m = (self._rotated(method, np.array([t])) if t is not None
                  else np.full((1, 3), np.nan))
-            marker.set_data_3d(*_mpl3(m))
+            marker.set_data_3d(*mpl3(m))
         if self._blitter is not None:
             self._blitter.blit()
         else:
@@ -537,7 +546,7 @@ class JointAngleFigure:
         if a.ndim != 2 or a.shape[1] != len(labels):
             raise ValueError(f"angles must have shape (F, {len(labels)}), got {a.shape}")
         self.times = np.arange(a.shape[0]) * frame_time
-        self.figure = _figure(figsize)
+        self.figure = agg_figure(figsize)
         self.ax = self.figure.add_subplot()
         for k, label in enumerate(labels):
             self.ax.plot(self.times, a[:, k], lw=1.4, label=label,
@@ -551,14 +560,14 @@ class JointAngleFigure:
                            ncol=min(3, len(labels)))
         self.cursor = self.ax.axvline(0.0, color="#2b3440", lw=1.2, animated=True)
         self.figure.canvas.draw()
-        self._background = self.figure.canvas.copy_from_bbox(self.figure.bbox)
+        self._background = agg_canvas(self.figure).copy_from_bbox(self.figure.bbox)
         self.set_frame(0)
 
     def set_frame(self, frame: int) -> None:
         """Move the cursor to ``frame`` (blitted)."""
         t = self.times[int(frame)]
         self.cursor.set_xdata([t, t])
-        self.figure.canvas.restore_region(self._background)
+        agg_canvas(self.figure).restore_region(self._background)
         self.ax.draw_artist(self.cursor)
         self.figure.canvas.blit(self.figure.bbox)
 

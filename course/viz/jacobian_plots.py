@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from .._typing import Array
 from .chain_plots import GREEN, ChainFigure, draw_chain, draw_target, panels
-from .figures import BONE, JOINT, METHOD_COLORS, TARGET, _mpl3, convergence_plot
+from .figures import BONE, JOINT, METHOD_COLORS, TARGET, convergence_plot, mpl3
 
 START = "#c3cad3"    # a start or captured pose, underneath
 MUTED = "#5b6b7c"
@@ -367,15 +367,15 @@ def word_figure(word: ArrayLike, pen_up: Sequence[int], positions: Mapping[str, 
     for k, (ax, (method, frames)) in enumerate(zip(axes, positions.items(), strict=True)):
         P = np.asarray(frames, dtype=np.float64)
         for s in range(len(w) - 1):
-            ax.plot(*_mpl3(strokes[s:s + 2]), color=START, lw=1 if s in pen_up else 5,
+            ax.plot(*mpl3(strokes[s:s + 2]), color=START, lw=1 if s in pen_up else 5,
                     ls=":" if s in pen_up else "-")
         for f in range(0, len(P), every):
-            ax.plot(*_mpl3(P[f]), "-o", color=colormaps["viridis"](f / len(P)), lw=1.5, ms=2.5,
+            ax.plot(*mpl3(P[f]), "-o", color=colormaps["viridis"](f / len(P)), lw=1.5, ms=2.5,
                     alpha=0.7)
-        ax.plot(*_mpl3(P[:, -1]), color=_color(k), lw=2)
+        ax.plot(*mpl3(P[:, -1]), color=_color(k), lw=2)
         ax.set(xlim=(lo[2], hi[2]), ylim=(lo[0], hi[0]), zlim=(lo[1], hi[1]), xticklabels=[],
                yticklabels=[], zticklabels=[])
-        ax.set_box_aspect(_mpl3(hi - lo), zoom=1.3)
+        ax.set_box_aspect(mpl3(hi - lo), zoom=1.3)
         ax.view_init(elev=10, azim=-68)
         mean = np.asarray(iterations[method], dtype=np.float64).mean()
         ax.set_title(f"{method}\n{mean:.1f} iterations / frame", fontsize=9)

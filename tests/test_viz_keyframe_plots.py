@@ -1,11 +1,11 @@
-"""course.keyframes.plots: the notebook's explorers update from code and draw what they claim."""
+"""course.viz.keyframe_plots: the notebook's explorers update from code and draw what they claim."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from course.keyframes import catmull_rom, cubic, polynomial
-from course.keyframes.plots import RungeExplorer, SplineExplorer, spline_family
+from course.viz.keyframe_plots import RungeExplorer, SplineExplorer, spline_family
 
 
 def test_runge_explorer_follows_its_slider():

@@ -5,25 +5,23 @@ beside its sliders. Redraws blit: the static part (axes, grid, the function bein
 approximated) is rendered once and cached; a slider change restores it and draws only the
 curves that moved (``animated=True`` artists), then sends the canvas as a PNG. Setting a
 slider's ``.value`` from code runs the same update, so the notebook and tests can drive them.
-Imported on its own (``from course.keyframes.plots import ...``): matplotlib and ipywidgets
-are not loaded by ``import course.keyframes``.
+Imported on its own (``from course.viz.keyframe_plots import ...``): matplotlib and
+ipywidgets are not loaded by ``import course.keyframes``.
 """
 
 from __future__ import annotations
 
-import io
 from collections.abc import Sequence
 from typing import Any
 
 import ipywidgets as widgets
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
-from PIL import Image
 
-from ..viz.chain_plots import _style
-from .curves import bezier, catmull_rom, cubic, linear, polynomial
+from ..keyframes.curves import bezier, catmull_rom, cubic, linear, polynomial
+from .chain_plots import style_axes
+from .figures import Blitter, agg_figure, figure_png
 
 SCHEME_COLORS = {
     "linear": "#4a5561",
@@ -52,34 +50,23 @@ def spline_family(keys: ArrayLike, times: ArrayLike, t: ArrayLike,
     }
 
 
-class _BlitCanvas:
-    """A figure whose static part is cached; the ``animated`` artists are drawn over it."""
+class _BlitImage:
+    """A blitted figure (:class:`~course.viz.figures.Blitter`) sent as an ``ipywidgets.Image``."""
 
     def __init__(self, figure: Figure, artists: Sequence[Any]) -> None:
-        self.figure, self.artists = figure, list(artists)
-        self.background: Any = None
+        self.blitter = Blitter(figure, artists)
         self.image = widgets.Image(format="png", width=int(figure.get_figwidth() * 90))
 
     def redraw(self) -> None:
-        canvas = self.figure.canvas
-        if self.background is None:  # first time: render the static part once
-            canvas.draw()
-            self.background = canvas.copy_from_bbox(self.figure.bbox)
-        canvas.restore_region(self.background)
-        for artist in self.artists:
-            artist.axes.draw_artist(artist)
-        canvas.blit(self.figure.bbox)
-        buffer = io.BytesIO()
-        Image.fromarray(np.asarray(canvas.buffer_rgba())).save(buffer, format="png")
-        self.image.value = buffer.getvalue()
+        self.blitter.blit()
+        self.image.value = figure_png(self.blitter.figure)
 
 
 def _figure(width: float, height: float, rows: int = 1) -> tuple[Figure, Any]:
-    figure = Figure(figsize=(width, height), dpi=90, layout="constrained")
-    FigureCanvasAgg(figure)
+    figure = agg_figure((width, height), dpi=90)
     axes = figure.subplots(rows, 1, sharex=True)
     for ax in np.atleast_1d(axes):
-        _style(ax)  # the notebooks' look, without pyplot's global rcParams
+        style_axes(ax)  # the notebooks' look, without pyplot's global rcParams
     return figure, axes
 
 
@@ -100,7 +87,7 @@ class RungeExplorer:
         (self.keys,) = ax.plot([], [], "o", color="#f08c3a", ms=6, animated=True, label="keys")
         self.text = ax.text(0.02, 0.96, "", transform=ax.transAxes, va="top", animated=True)
         ax.legend(loc="upper right", frameon=False, fontsize=9)
-        self.canvas = _BlitCanvas(self.figure, (self.poly, self.spline, self.keys, self.text))
+        self.canvas = _BlitImage(self.figure, (self.poly, self.spline, self.keys, self.text))
         self.slider = widgets.IntSlider(value=n, min=3, max=max_keys, description="keys n")
         self.slider.observe(lambda _: self.update(), names="value")
         self.widget = widgets.VBox([self.slider, self.canvas.image])
@@ -160,7 +147,7 @@ class SplineExplorer:
         axes[-1].set_xlabel("t")
         (self.markers,) = axes[0].plot([], [], "o", color="#f08c3a", ms=7, animated=True)
         artists = [line for row in self.lines for line in row.values()] + [self.markers]
-        self.canvas = _BlitCanvas(self.figure, artists)
+        self.canvas = _BlitImage(self.figure, artists)
         self.sliders = [
             widgets.FloatSlider(value=float(v), min=-1.2, max=1.2, step=0.05,
                                 orientation="vertical", description=f"p{i}",
