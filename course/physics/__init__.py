@@ -19,6 +19,11 @@ imported only when one of these names is first used, ``docs/physics.md``)::
     from course.physics import build_model, track
     character = build_model(motion.skeleton)
     result = track(character, motion, kp=1000, kd=6, hold_root=True)
+
+Standing and pushed (lecture 10, ``docs/physics.md``)::
+
+    from course.physics import Push, stand
+    run = stand(character, controller="com", push=Push("Hips", (150, 0, 0), 0.5, 0.1))
 """
 
 from typing import Any
@@ -72,7 +77,9 @@ from .rigid_body import (
 #: Names served lazily from course.physics.character (which imports mujoco on first use).
 _CHARACTER = (
     "CMU_SCALE",
+    "JOINT_LIMIT",
     "Character",
+    "Push",
     "TrackingResult",
     "build_model",
     "effective_inertia",
@@ -85,17 +92,30 @@ _CHARACTER = (
     "tracking_error_cm",
 )
 
+#: Names served lazily from course.physics.balance (lecture 10's static balance, mujoco too).
+_BALANCE = (
+    "BalanceResult",
+    "largest_push",
+    "stand",
+    "standing_pose",
+)
+
 
 def __getattr__(name: str) -> Any:
     if name in _CHARACTER:
         from . import character
 
         return getattr(character, name)
+    if name in _BALANCE:
+        from . import balance
+
+        return getattr(balance, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 __all__ = [
     *_CHARACTER,
+    *_BALANCE,
     "BEND",
     "GRAVITY",
     "INTEGRATORS",

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -42,6 +43,8 @@ Array = NDArray[np.float64]
 
 #: Meters per unit of the CMU BVH clips (dm_control's ``CMU_SCALE`` for the CMU ASF/AMC).
 CMU_SCALE = 0.056444
+#: Default ball-joint cone (radians) of :func:`build_model`: 135 degrees, see its docstring.
+JOINT_LIMIT = 0.75 * math.pi
 _S = math.sqrt(0.5)
 #: y-up -> z-up, as a quaternion (w, x, y, z): +90 degrees about x.
 Y_TO_Z = np.array([_S, _S, 0.0, 0.0])
@@ -166,6 +169,7 @@ def build_model(
     friction: float = 1.0,
     armature: float = 0.01,
     timestep: float = 1.0 / 600.0,
+    joint_limits: bool | float = True,
 ) -> Character:
     """Build and compile a MuJoCo character from ``skeleton``.
 
@@ -186,6 +190,15 @@ def build_model(
         does: it keeps the light hand and finger bodies from forcing tiny steps.
     timestep : float
         The model's default step in seconds (:func:`track` sets its own).
+    joint_limits : bool or float
+        A cone limit on every ball joint: its rotation from the rest pose (the angle of its
+        local quaternion) stays below the given angle in radians (MuJoCo ``limited="true"
+        range="0 angle"``, a constraint the solver enforces, so a limit can be exceeded
+        slightly while it pushes back). ``True`` is :data:`JOINT_LIMIT`, 135 degrees: the
+        CMU walk's largest joint rotation is 97 degrees (the arms, lowered from the T-pose
+        rest), so the limit never binds while a clip is tracked, and 135 degrees is about a
+        knee's anatomical flexion, so a push cannot fold a joint through the body. ``False``:
+        no limits.
 
     Returns
     -------
@@ -197,6 +210,14 @@ def build_model(
     s = guess_scale(skeleton) if scale is None else float(scale)
     offsets = skeleton.offsets * s @ Y_TO_Z_MATRIX.T  # (J, 3), z-up meters
     end = [is_end_site(skeleton, j) for j in range(skeleton.n_joints)]
+    if joint_limits is True:
+        limit: float | None = JOINT_LIMIT
+    elif joint_limits is False:
+        limit = None
+    else:
+        limit = float(joint_limits)
+        if not 0.0 < limit <= math.pi:
+            raise ValueError(f"joint_limits: {limit!r} rad is not in (0, pi]")
     rest_min = float(np.min((skeleton.rest_positions() * s @ Y_TO_Z_MATRIX.T)[:, 2]))
     lines: list[str] = []
 
@@ -208,6 +229,8 @@ def build_model(
         lines.append(f'{indent}<body name="{name}" pos="{_fmt(pos)}">')
         kind = "free" if j == 0 else "ball"
         extra = "" if j == 0 else f' armature="{armature:.9g}"'
+        if j > 0 and limit is not None:
+            extra += f' limited="true" range="0 {limit:.9g}"'
         lines.append(f'{indent}  <joint name="{name}" type="{kind}"{extra}/>')
         lines.append(f'{indent}  <geom name="{name}" type="sphere" size="{radius:.9g}"/>')
         for c in skeleton.children(j):
@@ -225,6 +248,7 @@ def build_model(
     xml = "\n".join(
         [
             f'<mujoco model="{skeleton.names[0]}_character">',
+            '  <compiler angle="radian"/>',
             f'  <option timestep="{timestep:.9g}" gravity="0 0 -9.81"/>',
             "  <default>",
             f'    <geom density="{density:.9g}" contype="2" conaffinity="1" '
@@ -324,6 +348,82 @@ def motion_from_qpos(
     return Motion(character.skeleton, local, root, frame_time, name=name)
 
 
+# -- pushes ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Push:
+    """An external force 外力 on one body for a while: a shove.
+
+    Attributes
+    ----------
+    joint : str
+        Name of the skeleton joint whose body is pushed (the force acts at that body's centre
+        of mass), e.g. the root or a spine joint. Checked against a character by
+        :meth:`body`.
+    force : array_like, shape (3,)
+        Newtons, y-up world frame; stored as a float ndarray.
+    start : float
+        Seconds after the start of the simulation.
+    duration : float
+        Seconds; positive.
+
+    The force is applied on every step whose midpoint ``(k + 1/2) h`` lies in
+    ``[start, start + duration)``, through MuJoCo's ``xfrc_applied``.
+    """
+
+    joint: str
+    force: tuple[float, float, float] | Array
+    start: float
+    duration: float
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.joint, str):
+            raise TypeError(f"Push.joint: a joint name (str), got {type(self.joint).__name__}")
+        force = np.array(self.force, dtype=float)
+        if force.shape != (3,) or not np.all(np.isfinite(force)):
+            raise ValueError(f"Push.force: 3 finite newtons (y-up), got {self.force!r}")
+        if not (math.isfinite(self.start) and self.start >= 0.0):
+            raise ValueError(f"Push.start: a time >= 0 s, got {self.start!r}")
+        if not (math.isfinite(self.duration) and self.duration > 0.0):
+            raise ValueError(f"Push.duration: a positive time in s, got {self.duration!r}")
+        force.flags.writeable = False
+        object.__setattr__(self, "force", force)
+        object.__setattr__(self, "start", float(self.start))
+        object.__setattr__(self, "duration", float(self.duration))
+
+    @property
+    def impulse(self) -> float:
+        """``|force| * duration`` in N s."""
+        return float(np.linalg.norm(self.force)) * self.duration
+
+    def body(self, character: Character) -> int:
+        """MuJoCo body id of :attr:`joint` in ``character``; ValueError if it has none."""
+        names = character.skeleton.names
+        if self.joint not in names:
+            some = ", ".join(repr(n) for n in names[:6])
+            raise ValueError(
+                f"Push.joint: {self.joint!r} is not a joint of the skeleton "
+                f"({len(names)} joints: {some}, ...)"
+            )
+        b = character.bodies[names.index(self.joint)]
+        if b < 0:
+            raise ValueError(
+                f"Push.joint: {self.joint!r} is an End Site, it has no body; push its parent"
+            )
+        return b
+
+    def active(self, t: float, h: float) -> bool:
+        """Whether the step ``[t, t + h)`` pushes (its midpoint is in the push's interval)."""
+        mid = t + 0.5 * h
+        return self.start <= mid < self.start + self.duration
+
+    def force_z_up(self) -> Array:
+        """The force in MuJoCo's z-up world frame (N)."""
+        out: Array = Y_TO_Z_MATRIX @ np.asarray(self.force)
+        return out
+
+
 # -- PD tracking -----------------------------------------------------------------------------
 
 
@@ -393,6 +493,8 @@ def track(
     fall_height: float | None = None,
     gravity: bool = True,
     torques: bool = True,
+    push: Push | None = None,
+    on_frame: Callable[[int, Motion], None] | None = None,
 ) -> TrackingResult:
     r"""Simulate ``character`` tracking ``motion`` with joint PD control.
 
@@ -429,6 +531,13 @@ def track(
         Root height (m) below which the character has fallen; default half the initial.
     gravity, torques : bool
         Switch gravity or the PD torques off (``torques=False``: a passive ragdoll).
+    push : Push, optional
+        An external force during the run (its time counts from frame 0).
+    on_frame : callable, optional
+        ``on_frame(i, frame)`` is called after each simulated clip frame ``i = 1 .. F-1``
+        with that frame as a 1-frame :class:`~course.motion.Motion` (equal to
+        ``result.motion[i]``), so a view can play while the simulation runs. Its time is
+        counted in ``wall_time``.
 
     Returns
     -------
@@ -465,10 +574,15 @@ def track(
     fall_time: float | None = None
     unstable = False
     kd_explicit = 0.0 if stable_pd else kd
+    push_body = push.body(character) if push is not None else -1
+    push_force = push.force_z_up() if push is not None else np.zeros(3)
     start = time.perf_counter()
     for i in range(1, n):
         target = qref[i]
         for k in range(steps):
+            if push is not None:
+                t = ((i - 1) * steps + k) * h_used
+                data.xfrc_applied[push_body, :3] = push_force if push.active(t, h_used) else 0.0
             if hold_root:
                 alpha = (k + 1) / steps
                 data.qpos[:3] = (1 - alpha) * qref[i - 1, :3] + alpha * target[:3]
@@ -496,6 +610,9 @@ def track(
         if fall_time is None and data.qpos[2] < threshold:
             fall_time = i * motion.frame_time
         out[i] = data.qpos
+        if on_frame is not None:
+            on_frame(i, motion_from_qpos(character, out[i : i + 1], motion.frame_time,
+                                         name=f"{motion.name} (sim)"))
     wall = time.perf_counter() - start
     simulated = motion_from_qpos(character, out, motion.frame_time, name=f"{motion.name} (sim)")
     return TrackingResult(
@@ -532,7 +649,9 @@ def effective_inertia(character: Character, motion: Motion | None = None) -> Arr
 
 __all__ = [
     "CMU_SCALE",
+    "JOINT_LIMIT",
     "Character",
+    "Push",
     "TrackingResult",
     "build_model",
     "effective_inertia",

@@ -1,0 +1,528 @@
+"""Static balance 静态平衡 of a simulated character (lecture 10): PD on the centre of mass.
+
+A character from :func:`course.physics.character.build_model` stands on both feet in
+:func:`standing_pose`. :func:`stand` simulates it for a while, optionally pushed
+(:class:`~course.physics.character.Push`), under one of three controllers named after the
+lecture:
+
+``"none"``
+    joint PD only, holding the standing pose: :math:`\\tau = k_p(\\bar q \\ominus q) - k_d\\dot q`
+    per ball joint (the root is never actuated).
+``"ankle"``
+    the ankle strategy 踝关节策略: the same joint PD, plus a desired horizontal force on the
+    centre of mass (COM) :math:`f = k_{p,c}(\\bar c - c) - k_{d,c}\\dot c` turned into torques
+    at the ankles only, :math:`\\tau_{ankle} = \\tilde J_{ankle}^\\top f`.
+``"com"``
+    Jacobian transpose 雅可比转置 (a virtual force, as in SIMBICON and Coros et al. 2010):
+    the same force turned into torques on every joint of the leg chains from the stance feet
+    to the root, :math:`\\tau = \\tilde J^\\top f`, plus gravity compensation: the virtual force
+    :math:`m g` upwards through the same Jacobian (each foot carries half).
+
+:math:`\\tilde J` is the COM Jacobian with the stance foot fixed: with ``J_c`` from
+``mj_jacSubtreeCom`` (the floating-base COM Jacobian, 3 x nv) and ``J_f`` from ``mj_jacBody``
+(the foot body's 6 x nv Jacobian), a joint velocity ``q̇_leg`` with the foot held still needs a
+root velocity ``v_root = -J_f,root^-1 J_f,leg q̇_leg``, so
+
+.. math:: \\tilde J = J_{c,leg} - J_{c,root}\\, J_{f,root}^{-1} J_{f,leg},
+
+which is what a torque must push against to move the COM while the foot stays on the ground.
+By virtual work, :math:`\\tau = \\tilde J^\\top f` does the work :math:`f\\cdot\\delta c` of
+the force. MuJoCo's frames are z-up; everything returned here is y-up meters.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..motion import Motion
+from .character import (
+    Y_TO_Z_MATRIX,
+    Character,
+    Push,
+    _mujoco,
+    motion_from_qpos,
+    qpos_from_motion,
+)
+
+Array = NDArray[np.float64]
+
+#: The controllers :func:`stand` knows.
+CONTROLLERS = ("none", "ankle", "com")
+_GRAVITY = 9.81
+
+
+# -- feet and the standing pose --------------------------------------------------------------
+
+
+def foot_chains(character: Character) -> tuple[tuple[int, ...], ...]:
+    """The feet: per foot, skeleton joints from the ankle down to the tip, top first.
+
+    A foot is a chain of joints whose rest heights are all within 10% of the skeleton's
+    height of its lowest point; its first joint (the ankle) has a parent above that band. On
+    the CMU skeleton: ``LeftFoot, LeftToeBase, LeftToeBase_end`` and the right one.
+    """
+    skel = character.skeleton
+    rest = skel.rest_positions()
+    low = float(rest[:, 1].min())
+    band = low + 0.1 * float(np.ptp(rest[:, 1]))
+    chains = []
+    for j in range(1, skel.n_joints):
+        p = skel.parents[j]
+        if rest[j, 1] > band or rest[p, 1] <= band:
+            continue
+        chain = [j]
+        while True:
+            kids = [c for c in skel.children(chain[-1]) if rest[c, 1] <= band]
+            if not kids:
+                break
+            chain.append(kids[0])
+        if len(chain) >= 2:
+            chains.append(tuple(chain))
+    if len(chains) < 2:
+        raise ValueError(
+            f"skeleton {skel.names[0]!r}: found {len(chains)} feet (chains of joints near the "
+            "lowest point of the rest pose); standing needs two"
+        )
+    return tuple(chains)
+
+
+def _rotation_between(a: Array, b: Array) -> Array:
+    """Unit quaternion of the smallest rotation taking direction ``a`` to direction ``b``."""
+    a = a / np.linalg.norm(a)
+    b = b / np.linalg.norm(b)
+    axis = np.cross(a, b)
+    s = float(np.linalg.norm(axis))
+    c = float(np.dot(a, b))
+    if s < 1e-12:
+        return np.array([1.0, 0.0, 0.0, 0.0])
+    angle = math.atan2(s, c)
+    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis / s])
+
+
+def _qmul(a: Array, b: Array) -> Array:
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return np.array(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ]
+    )
+
+
+def _qinv(q: Array) -> Array:
+    out: Array = q * np.array([1.0, -1.0, -1.0, -1.0])
+    return out
+
+
+def _rotvec_quat(w: Array) -> Array:
+    angle = float(np.linalg.norm(w))
+    if angle < 1e-15:
+        return np.array([1.0, 0.0, 0.0, 0.0])
+    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * w / angle])
+
+
+def _com_y_up(character: Character, data: Any) -> Array:
+    """Whole-body COM of ``data`` (after kinematics), y-up meters."""
+    root = character.bodies[0]
+    out: Array = Y_TO_Z_MATRIX.T @ data.subtree_com[root]
+    return out
+
+
+def support_centre(character: Character, motion: Motion, frame: int = 0) -> Array:
+    """Centre of the feet, y-up meters: the mean over feet of the midpoint of ankle and tip."""
+    positions, _ = motion[frame : frame + 1].forward_kinematics()
+    p = positions[0] * character.scale
+    mids = [(p[c[0]] + p[c[-1]]) / 2 for c in foot_chains(character)]
+    out: Array = np.mean(mids, axis=0)
+    return out
+
+
+def standing_pose(character: Character) -> Motion:
+    """A 1-frame standing pose, both feet flat on the ground, made from the skeleton.
+
+    How it is made, from the rest pose (every local rotation the identity: for BVH skeletons a
+    T-pose with straight legs):
+
+    1. each foot bone (:func:`foot_chains`: ankle to toe to tip) is turned by the smallest
+       rotation that makes it horizontal, so the whole foot lies flat;
+    2. the body is tilted as a whole (the root's rotation, the ankles turned back so the feet
+       stay flat) until the COM (MuJoCo's ``subtree_com``) is straight above the centre of the
+       feet (:func:`support_centre`): five fixed-point steps, the tilt moving the COM
+       horizontally by ``L ω`` for a COM height ``L`` above the ankles;
+    3. the root is placed so the feet's centre is above the origin and the lowest foot joint
+       at height 0 (the clip ground of :func:`~course.physics.character.build_model`, whose
+       floor is one capsule radius lower, so the foot capsules rest on it).
+
+    Returns
+    -------
+    Motion
+        One frame, ``frame_time`` 1/60 s, named ``"standing"``.
+    """
+    mujoco = _mujoco()
+    skel = character.skeleton
+    feet = foot_chains(character)
+    n = skel.n_joints
+    local = np.zeros((1, n, 4))
+    local[..., 0] = 1.0
+    level: dict[int, Array] = {}  # wanted global rotation of each foot joint
+    for chain in feet:
+        for j, c in zip(chain[:-1], chain[1:], strict=True):
+            d = skel.offsets[c].astype(float)
+            flat = d * np.array([1.0, 0.0, 1.0])
+            level[j] = _rotation_between(d, flat) if np.linalg.norm(flat) > 1e-9 else np.array(
+                [1.0, 0.0, 0.0, 0.0]
+            )
+    tilt = np.zeros(3)
+    data = mujoco.MjData(character.model)
+    motion = Motion(skel, local, np.zeros((1, 3)), 1.0 / 60.0, name="standing")
+    up = np.array([0.0, 1.0, 0.0])
+    for _ in range(6):
+        local[0, 0] = _rotvec_quat(tilt)
+        # feet flat whatever the tilt: local = parent's global^-1 * wanted global
+        for chain in feet:
+            g_parent = _global(motion, skel.parents[chain[0]])
+            for j in chain[:-1]:
+                local[0, j] = _qmul(_qinv(g_parent), level[j])
+                g_parent = level[j]
+        motion = Motion(skel, local.copy(), np.zeros((1, 3)), 1.0 / 60.0, name="standing")
+        positions, _ = motion.forward_kinematics()
+        foot_joints = [j for chain in feet for j in chain]
+        centre = support_centre(character, motion) / character.scale  # skeleton units
+        root = -centre * np.array([1.0, 0.0, 1.0])
+        root[1] = -float(positions[0, foot_joints, 1].min())
+        motion = Motion(skel, local.copy(), root[None], 1.0 / 60.0, name="standing")
+        data.qpos[:] = qpos_from_motion(character, motion)[0]
+        mujoco.mj_kinematics(character.model, data)
+        mujoco.mj_comPos(character.model, data)
+        com = _com_y_up(character, data)
+        sup = support_centre(character, motion)
+        offset = (com - sup) * np.array([1.0, 0.0, 1.0])
+        height = float(com[1] - sup[1])
+        tilt = tilt + np.cross(up, -offset) / height
+    return motion
+
+
+def _global(motion: Motion, j: int) -> Array:
+    _, rotations = motion.forward_kinematics()
+    out: Array = np.asarray(rotations[0, j], dtype=float)
+    return out
+
+
+# -- Jacobians -------------------------------------------------------------------------------
+
+
+def com_jacobian(character: Character, model: Any, data: Any) -> Array:
+    """Floating-base COM Jacobian ``J_c`` (3, nv), z-up: ``ċ = J_c q̇`` (``mj_jacSubtreeCom``
+    of the root body; ``data`` must have had ``mj_forward`` or ``mj_step``)."""
+    mujoco = _mujoco()
+    jac = np.zeros((3, model.nv))
+    mujoco.mj_jacSubtreeCom(model, data, jac, character.bodies[0])
+    return jac
+
+
+def _ancestor_dofs(character: Character, model: Any, body: int) -> Array:
+    """DOF indices of ``body`` and its ancestors' ball joints (the root's excluded)."""
+    dofs: list[int] = []
+    b = body
+    while b > 0 and b != character.bodies[0]:
+        adr = int(model.body_dofadr[b])
+        dofs.extend(range(adr, adr + int(model.body_dofnum[b])))
+        b = int(model.body_parentid[b])
+    return np.array(sorted(dofs), dtype=int)
+
+
+def stance_com_jacobian(character: Character, model: Any, data: Any, foot_body: int) -> Array:
+    """COM Jacobian with ``foot_body`` held fixed, (3, nv), z-up (module docstring):
+    ``J_c - J_c,root J_f,root^-1 J_f``; its root columns are zero."""
+    mujoco = _mujoco()
+    jc = com_jacobian(character, model, data)
+    jp = np.zeros((3, model.nv))
+    jr = np.zeros((3, model.nv))
+    mujoco.mj_jacBody(model, data, jp, jr, foot_body)
+    jf = np.vstack([jp, jr])
+    out: Array = jc - jc[:, :6] @ np.linalg.solve(jf[:, :6], jf)
+    return out
+
+
+# -- standing --------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class BalanceResult:
+    """What :func:`stand` returns.
+
+    Attributes
+    ----------
+    motion : Motion
+        The simulated motion, one frame per control frame (frame 0 the initial pose).
+    fell : bool
+        Whether the COM went below ``fall_fraction`` of its initial height.
+    fall_time : float or None
+        Simulated seconds at the first such frame.
+    com : ndarray, shape (F, 3)
+        COM per frame, y-up meters.
+    com_target : ndarray, shape (3,)
+        The COM target ``c̄``: the initial COM (above the feet's centre), y-up meters.
+    support : ndarray, shape (3,)
+        Centre of the feet at the start (:func:`support_centre`), y-up meters.
+    torques : ndarray, shape (F, nv - 6)
+        Actuated joint torques (N m, joint frames) of the last step of each frame.
+    push : Push or None
+    controller : str
+    h, sim_time, wall_time : float
+        Step, simulated seconds and wall-clock seconds of the loop.
+    """
+
+    motion: Motion
+    fell: bool
+    fall_time: float | None
+    com: Array = field(repr=False)
+    com_target: Array
+    support: Array
+    torques: Array = field(repr=False)
+    push: Push | None
+    controller: str
+    h: float
+    sim_time: float
+    wall_time: float
+
+    @property
+    def rate(self) -> float:
+        """Simulated seconds per wall-clock second."""
+        return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
+
+    @property
+    def max_torque(self) -> float:
+        """Largest absolute joint torque component over the run (N m)."""
+        return float(np.abs(self.torques).max()) if self.torques.size else 0.0
+
+
+def stand(
+    character: Character,
+    pose: Motion | None = None,
+    *,
+    duration: float = 3.0,
+    h: float = 1.0 / 600.0,
+    kp: float = 1000.0,
+    kd: float = 5.0,
+    controller: str = "com",
+    com_kp: float = 2000.0,
+    com_kd: float = 300.0,
+    gravity_compensation: bool | None = None,
+    torque_limit: float = 400.0,
+    push: Push | None = None,
+    on_frame: Callable[[int, Motion], None] | None = None,
+    frame_time: float = 1.0 / 60.0,
+    fall_fraction: float = 0.6,
+    stop_when_fallen: bool = False,
+    torques: bool = True,
+) -> BalanceResult:
+    r"""Simulate ``character`` standing in ``pose`` under a balance controller.
+
+    Parameters
+    ----------
+    character : Character
+    pose : Motion, optional
+        Frame 0 is the pose held (and the start, at rest); default :func:`standing_pose`.
+    duration : float
+        Simulated seconds.
+    h : float
+        Requested step; rounded so a whole number fits ``frame_time``.
+    kp, kd : float
+        Joint PD gains (N m/rad, N m s/rad), every ball joint, all controllers.
+    controller : {"none", "ankle", "com"}
+        Module docstring.
+    com_kp, com_kd : float
+        COM PD gains (N/m, N s/m) of the horizontal virtual force
+        :math:`f = k_{p,c}(\bar c - c) - k_{d,c}\dot c`.
+    gravity_compensation : bool, optional
+        Add :math:`\tilde J^\top (m g)` on the leg chains; default on for ``"com"`` only.
+    torque_limit : float
+        Per-component limit on the total joint torque (N m).
+    push : Push, optional
+        A shove during the run.
+    on_frame : callable, optional
+        ``on_frame(i, frame)`` after each frame ``i = 1 .. F-1`` with a 1-frame Motion.
+    frame_time : float
+        Seconds per recorded frame (the control frame).
+    fall_fraction : float
+        The character has fallen when its COM is below this fraction of its initial height.
+    stop_when_fallen : bool
+        End the run at the first fallen frame (``motion`` is then shorter).
+    torques : bool
+        ``False``: no torques at all, a passive ragdoll.
+
+    Returns
+    -------
+    BalanceResult
+    """
+    if controller not in CONTROLLERS:
+        raise ValueError(f"controller: {controller!r} is not one of {CONTROLLERS}")
+    if not (duration > 0 and h > 0 and frame_time > 0):
+        raise ValueError("duration, h and frame_time must be positive")
+    mujoco = _mujoco()
+    if pose is None:
+        pose = standing_pose(character)
+    if pose.skeleton.n_joints != character.skeleton.n_joints:
+        raise ValueError("pose: its skeleton does not match the character's")
+    comp = controller == "com" if gravity_compensation is None else bool(gravity_compensation)
+    steps = max(1, round(frame_time / h))
+    h_used = frame_time / steps
+    n = max(2, round(duration / frame_time) + 1)
+    model = character.fresh_model()
+    model.opt.timestep = h_used
+    data = mujoco.MjData(model)
+    target = qpos_from_motion(character, pose[:1])[0]
+    data.qpos[:] = target
+    mujoco.mj_forward(model, data)
+    push_body = push.body(character) if push is not None else -1
+    push_force = push.force_z_up() if push is not None else np.zeros(3)
+
+    feet = foot_chains(character)
+    foot_bodies = [character.bodies[c[0]] for c in feet]
+    leg_dofs = [
+        _ancestor_dofs(character, model, b) if controller == "com" else
+        np.arange(int(model.body_dofadr[b]), int(model.body_dofadr[b]) + 3)
+        for b in foot_bodies
+    ]
+    mass = float(np.sum(model.body_mass))
+    c_bar = data.subtree_com[character.bodies[0]].copy()  # z-up
+    com0_height = float(c_bar[2])
+    support = support_centre(character, pose)
+
+    out = np.empty((n, model.nq))
+    out[0] = data.qpos
+    com = np.empty((n, 3))
+    com[0] = c_bar
+    tau_log = np.zeros((n, model.nv - 6))
+    err = np.zeros(model.nv)
+    tau = np.zeros(model.nv)
+    f_weight = np.array([0.0, 0.0, mass * _GRAVITY]) if comp else np.zeros(3)
+    fall_time: float | None = None
+    last = n - 1
+    start = time.perf_counter()
+    for i in range(1, n):
+        for k in range(steps):
+            if push is not None:
+                t = ((i - 1) * steps + k) * h_used
+                data.xfrc_applied[push_body, :3] = push_force if push.active(t, h_used) else 0.0
+            mujoco.mj_step1(model, data)  # kinematics, COM and Jacobians of the current state
+            if torques:
+                mujoco.mj_differentiatePos(model, err, 1.0, data.qpos, target)
+                np.multiply(err, kp, out=tau)
+                tau -= kd * data.qvel
+                tau[:6] = 0.0
+                if controller != "none":
+                    jc = com_jacobian(character, model, data)
+                    c = data.subtree_com[character.bodies[0]]
+                    cdot = jc @ data.qvel
+                    f = com_kp * (c_bar - c) - com_kd * cdot
+                    f[2] = 0.0  # horizontal
+                    f = (f + f_weight) / len(feet)
+                    for b, dofs in zip(foot_bodies, leg_dofs, strict=True):
+                        jt = stance_com_jacobian(character, model, data, b)
+                        tau[dofs] += jt[:, dofs].T @ f
+                np.clip(tau, -torque_limit, torque_limit, out=tau)
+                data.qfrc_applied[:] = tau
+            mujoco.mj_step2(model, data)
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        out[i] = data.qpos
+        com[i] = data.subtree_com[character.bodies[0]]
+        tau_log[i] = data.qfrc_applied[6:]
+        if fall_time is None and com[i, 2] < fall_fraction * com0_height:
+            fall_time = i * frame_time
+        if on_frame is not None:
+            on_frame(i, motion_from_qpos(character, out[i : i + 1], frame_time, name="stand"))
+        if fall_time is not None and stop_when_fallen:
+            last = i
+            break
+    wall = time.perf_counter() - start
+    out = out[: last + 1]
+    return BalanceResult(
+        motion=motion_from_qpos(character, out, frame_time, name="stand"),
+        fell=fall_time is not None,
+        fall_time=fall_time,
+        com=com[: last + 1] @ Y_TO_Z_MATRIX,
+        com_target=Y_TO_Z_MATRIX.T @ c_bar,
+        support=support,
+        torques=tau_log[: last + 1],
+        push=push,
+        controller=controller,
+        h=h_used,
+        sim_time=last * frame_time,
+        wall_time=wall,
+    )
+
+
+def largest_push(
+    character: Character,
+    pose: Motion | None = None,
+    *,
+    controller: str,
+    direction: Sequence[float] | Array = (1.0, 0.0, 0.0),
+    duration: float = 0.1,
+    joint: str | None = None,
+    tol: float = 5.0,
+    start: float = 0.25,
+    settle: float = 1.5,
+    max_force: float = 1e5,
+    **stand_options: Any,
+) -> float:
+    """The largest push (N) the character survives, by bisection over the force.
+
+    The push acts on ``joint`` (default the root) along ``direction`` (y-up, normalized) for
+    ``duration`` seconds from ``start``; the character survives it when :func:`stand` under
+    ``controller`` has not fallen ``settle`` seconds after the push ends. The force doubles
+    from 100 N until one fells it, then bisection narrows the bracket to ``tol`` newtons; the
+    survived end is returned (its impulse is that times ``duration``). Deterministic: the
+    simulation has no randomness.
+    """
+    d = np.asarray(direction, dtype=float)
+    if d.shape != (3,) or not np.linalg.norm(d) > 0:
+        raise ValueError(f"direction: a nonzero 3-vector (y-up), got {direction!r}")
+    d = d / np.linalg.norm(d)
+    if pose is None:
+        pose = standing_pose(character)
+    name = character.skeleton.names[0] if joint is None else joint
+
+    def survives(force: float) -> bool:
+        push = Push(name, force * d, start, duration)
+        run = stand(character, pose, controller=controller, duration=start + duration + settle,
+                    push=push, stop_when_fallen=True, **stand_options)
+        return not run.fell
+
+    if not survives(0.0):
+        return 0.0
+    lo, hi = 0.0, 100.0
+    while survives(hi):
+        lo, hi = hi, 2 * hi
+        if hi > max_force:
+            return lo
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if survives(mid) else (lo, mid)
+    return lo
+
+
+__all__ = [
+    "CONTROLLERS",
+    "BalanceResult",
+    "com_jacobian",
+    "foot_chains",
+    "largest_push",
+    "stance_com_jacobian",
+    "stand",
+    "standing_pose",
+    "support_centre",
+]
