@@ -1,0 +1,434 @@
+r"""Assignment a6, physics: the spec ``assignments/a6_physics.py`` is checked by.
+
+* ``rigid_body_step`` is one semi-implicit (symplectic) Euler step in angular-momentum form,
+  compared with :func:`course.physics.rigid_body.step_rigid` (``method="symplectic"``,
+  ``rotation="quaternion"``, no gravity, the force and torque applied): :math:`v^+ = v + hf/m`,
+  :math:`x^+ = x + hv^+`, :math:`L^+ = L + h\tau`, :math:`\omega = R I_0^{-1} R^T L^+` with
+  :math:`R` the orientation at the start, :math:`q^+ = \mathrm{unit}(q + \frac h2 [0, \omega]
+  \otimes q)`; :math:`-q^+` is the same answer.
+* ``pd_torque`` is a ball joint's PD torque :math:`\tau = k_p\,r - k_d\,\omega` clipped per
+  component to :math:`\pm` ``limit``, :math:`r` the rotation vector of the shortest turn
+  :math:`q^{-1}\bar q` (in the joint's own frame, where :math:`\omega` is given).
+* ``balance_torque`` is the Jacobian-transpose balance torque :math:`\tau = J_c^T f`,
+  :math:`f = k_p(\bar c - c) - k_d\dot c`, of a planar chain standing on a fixed foot, with
+  :math:`J_c = \sum_i m_i J_{c_i}/M` the Jacobian of the whole body's centre of mass (no gravity
+  compensation).
+
+The mistakes students make each give one definite wrong answer, so the catalogue writes them
+as functions of the arguments.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from course import rotations as rot
+from course.physics.rigid_body import RigidBody, RigidState, step_rigid, t_handle
+
+from ..checks import Check, QuatCheck, TupleCheck, show
+from ..spec import Assignment, Case, Function, Misconception, random_edge_hidden
+
+# --- the rigid-body step -----------------------------------------------------------------------
+
+
+def step_reference(x: np.ndarray, v: np.ndarray, q: np.ndarray, L: np.ndarray, mass: float,
+                   inertia_body: np.ndarray, force: np.ndarray, torque: np.ndarray, h: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The library's symplectic step with the quaternion update, the force and torque given."""
+    body = RigidBody(mass=mass, inertia=inertia_body)
+    s = step_rigid(body, RigidState.create(x=x, v=v, q=q, L=L), h, method="symplectic",
+                   rotation="quaternion", gravity=np.zeros(3),
+                   applied=lambda _: (force, torque))
+    return s.x, s.v, s.q, s.L
+
+
+def step_formula(x: np.ndarray, v: np.ndarray, q: np.ndarray, L: np.ndarray, mass: float,
+                 inertia_body: np.ndarray, force: np.ndarray, torque: np.ndarray, h: float, *,
+                 omega: str = "world", renormalise: bool = True, explicit: bool = False
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    r"""The step written out, and as students get it wrong: ``omega="body"`` takes
+    :math:`\omega = I_0^{-1}L^+` (the body-frame inertia, not rotated), ``"transposed"``
+    :math:`R^T I_0^{-1} R L^+` (rotated the wrong way); ``renormalise=False`` leaves
+    :math:`q^+` off the unit sphere; ``explicit`` moves :math:`x` with the old :math:`v`."""
+    v_new = v + h * np.asarray(force) / mass
+    x_new = x + h * (v if explicit else v_new)
+    L_new = L + h * np.asarray(torque)
+    R = rot.matrix_from_quat(q)
+    inv = np.linalg.inv(inertia_body)
+    w = {"world": R @ inv @ R.T, "body": inv, "transposed": R.T @ inv @ R}[omega] @ L_new
+    q_new = q + 0.5 * h * rot.quat_mul(np.r_[0.0, w], q)
+    if renormalise:
+        q_new = q_new / np.linalg.norm(q_new)
+    return x_new, v_new, q_new, L_new
+
+
+def _variant(**how: Any) -> Any:
+    return lambda *args: step_formula(*args, **how)
+
+
+StepArgs = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, np.ndarray,
+                 np.ndarray, np.ndarray, float]
+
+
+def _random_quat(rng: np.random.Generator) -> np.ndarray:
+    q = rng.normal(size=4)
+    unit: np.ndarray = q / np.linalg.norm(q)
+    return unit
+
+
+def _inertia(rng: np.random.Generator, diagonal: bool = True) -> np.ndarray:
+    """A body-frame inertia: principal moments that satisfy the triangle inequality, on the
+    axes or turned by a random rotation (a body frame off its principal axes)."""
+    a, b = rng.uniform(0.2, 1.0, 2)
+    moments = np.array([a, b, rng.uniform(abs(a - b) + 0.05, a + b - 0.02)])
+    I0 = np.diag(moments)
+    if not diagonal:
+        R = rot.matrix_from_quat(_random_quat(rng))
+        I0 = R @ I0 @ R.T
+    return I0
+
+
+def _step_args(rng: np.random.Generator, h: float = 0.01, *, q: np.ndarray | None = None,
+               torque: bool = True, diagonal: bool = True, spin: float = 3.0) -> StepArgs:
+    I0 = _inertia(rng, diagonal)
+    return (rng.normal(0, 1, 3), rng.normal(0, 1, 3),
+            _random_quat(rng) if q is None else q, rng.normal(0, spin, 3) * np.diag(I0),
+            float(rng.uniform(0.5, 5.0)), I0, rng.normal(0, 3, 3),
+            rng.normal(0, 1, 3) if torque else np.zeros(3), h)
+
+
+def step_random(rng: np.random.Generator) -> list[Case]:
+    return [Case(f"a spinning body, h = {h:g}", _step_args(rng, h))
+            for h in (0.01, 1 / 60, 1 / 100, 0.02, 0.005)]
+
+
+def step_edges(rng: np.random.Generator) -> list[Case]:
+    handle = t_handle()
+    q = _random_quat(rng)
+    omega = np.array([20.0, 0.1, 0.05])  # about the bar: the intermediate axis
+    L_handle = rot.matrix_from_quat(q) @ handle.inertia @ omega
+    return [
+        Case("no torque (L must stay what it is)", _step_args(rng, torque=False)),
+        Case("at the identity orientation (R = I)",
+             _step_args(rng, q=np.array([1.0, 0.0, 0.0, 0.0]))),
+        Case("a body frame off its principal axes (I₀ not diagonal)",
+             _step_args(rng, diagonal=False)),
+        Case("a fast spin with a big step (h = 0.05)", _step_args(rng, 0.05, spin=10.0)),
+        Case("a T-handle spinning about its bar (the intermediate axis)",
+             (np.zeros(3), np.zeros(3), q, L_handle, handle.mass, handle.inertia, np.zeros(3),
+              np.zeros(3), 1e-3)),
+    ]
+
+
+def step_hidden(rng: np.random.Generator) -> list[Case]:
+    return [Case(f"hidden rigid body #{i + 1}",
+                 _step_args(rng, float(rng.choice([0.005, 0.01, 1 / 60, 0.03])),
+                            diagonal=bool(rng.random() < 0.5)))
+            for i in range(8)]
+
+
+def _explicit(got: Any, *args: Any) -> bool:
+    """x⁺ = x + h v (the old velocity), whatever the rest."""
+    x, v, *_, h = args
+    return bool(np.allclose(got[0], x + h * v, atol=1e-9)
+                and not np.allclose(got[0], step_reference(*args)[0], atol=1e-6))
+
+
+# --- the PD torque -----------------------------------------------------------------------------
+
+
+def _rotvec(d: np.ndarray, shortest: bool = True, factor: float = 2.0) -> np.ndarray:
+    """``factor`` atan2(|v|, w) v/|v| of quaternions (J, 4); ``shortest``: d ← -d where w < 0
+    first (2 log d is then the rotation vector of the turn of at most π)."""
+    if shortest:
+        d = d * np.where(d[:, :1] < 0, -1.0, 1.0)
+    v = d[:, 1:]
+    n = np.linalg.norm(v, axis=1, keepdims=True)
+    axis = np.divide(v, n, out=np.zeros_like(v), where=n > 1e-300)
+    out: np.ndarray = factor * np.arctan2(n, d[:, :1]) * axis
+    return out
+
+
+def pd_formula(q: np.ndarray, q_bar: np.ndarray, omega: np.ndarray, kp: float, kd: float,
+               limit: float, *, world: bool = False, shortest: bool = True,
+               factor: float = 2.0, kd_sign: float = -1.0, clip: bool = True) -> np.ndarray:
+    r"""τ = clip(k_p r - k_d ω, ±limit), r the rotation vector of q⁻¹ q̄; and the mistakes:
+    ``world`` (q̄ q⁻¹), ``shortest=False``, ``factor=1`` (log q, half the angle),
+    ``kd_sign=+1``, ``clip=False``."""
+    inv = rot.quat_conjugate(q)
+    d = rot.quat_mul(q_bar, inv) if world else rot.quat_mul(inv, q_bar)
+    tau = kp * _rotvec(d, shortest, factor) + kd_sign * kd * omega
+    out: np.ndarray = np.clip(tau, -limit, limit) if clip else tau
+    return out
+
+
+def pd_reference(q: np.ndarray, q_bar: np.ndarray, omega: np.ndarray, kp: float, kd: float,
+                 limit: float) -> np.ndarray:
+    """With the library's rotation vector (``rot.rotvec_from_quat``, the short way)."""
+    r = rot.rotvec_from_quat(rot.quat_mul(rot.quat_conjugate(q), q_bar))
+    out: np.ndarray = np.clip(kp * r - kd * omega, -limit, limit)
+    return out
+
+
+def _pd_args(rng: np.random.Generator, joints: int, *, flips: bool = True, spread: float = 1.2,
+             limit: float | None = None, identity: bool = False) -> tuple[Any, ...]:
+    q = np.tile([1.0, 0, 0, 0], (joints, 1)) if identity else np.array(
+        [_random_quat(rng) for _ in range(joints)])
+    turn = rot.quat_from_rotvec(rng.normal(0, spread, (joints, 3)))
+    q_bar = rot.quat_mul(q, turn)
+    if flips:
+        sign = np.where(rng.random(joints) < 0.5, -1.0, 1.0)
+        sign[0] = -1.0  # d = q⁻¹q̄ with w < 0 at least once
+        q_bar = q_bar * sign[:, None]
+    kp, kd = float(rng.uniform(50, 300)), float(rng.uniform(2, 20))
+    omega = rng.normal(0, 2, (joints, 3))
+    if limit is None:  # some components clipped, most not
+        tau = np.abs(pd_reference(q, q_bar, omega, kp, kd, np.inf))
+        limit = float(np.quantile(tau, 0.75))
+    return q, q_bar, omega, kp, kd, limit
+
+
+def pd_random(rng: np.random.Generator) -> list[Case]:
+    return [Case(f"{j} ball joints, some targets stored as -q̄, some torques at the limit",
+                 _pd_args(rng, j)) for j in (1, 3, 5, 8, 12)]
+
+
+def pd_edges(rng: np.random.Generator) -> list[Case]:
+    q, _, omega, kp, kd, _ = _pd_args(rng, 4)
+    return [
+        Case("at the target, still (no torque)", (q, q.copy(), np.zeros((4, 3)), kp, kd, 100.0)),
+        Case("at the target, moving (damping only)", (q, q.copy(), omega, kp, kd, 1e6)),
+        Case("a joint at its rest orientation (q = identity)", _pd_args(rng, 3, identity=True)),
+        Case("limits never reached", _pd_args(rng, 5, limit=1e6)),
+        Case("targets 2.5-3 rad away (the short way matters)", _pd_args(rng, 5, spread=1.7)),
+    ]
+
+
+def pd_hidden(rng: np.random.Generator) -> list[Case]:
+    return [Case(f"hidden joints #{i + 1}", _pd_args(rng, int(rng.integers(2, 10))))
+            for i in range(8)]
+
+
+# --- the balance torque ------------------------------------------------------------------------
+
+
+def chain_points(joint_angles: np.ndarray, lengths: np.ndarray, com_ratios: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Joint positions (n + 1, 2), the foot first, and link centres of mass (n, 2): link i
+    points along (-sin φ_i, cos φ_i), φ_i = θ_0 + ... + θ_i from the vertical."""
+    phi = np.cumsum(joint_angles)
+    u = np.stack([-np.sin(phi), np.cos(phi)], axis=1)
+    joints = np.vstack([np.zeros(2), np.cumsum(lengths[:, None] * u, axis=0)])
+    coms = joints[:-1] + (com_ratios * lengths)[:, None] * u
+    return joints, coms
+
+
+def point_jacobian(joints: np.ndarray, p: np.ndarray, link: int) -> np.ndarray:
+    """(2, n): ∂p/∂θ_j = ẑ × (p - joint_j) for the joints j <= ``link`` below p, else 0."""
+    n = len(joints) - 1
+    J = np.zeros((2, n))
+    r = p - joints[: link + 1]
+    J[0, : link + 1], J[1, : link + 1] = -r[:, 1], r[:, 0]
+    return J
+
+
+def com_jacobian(joint_angles: np.ndarray, lengths: np.ndarray, masses: np.ndarray,
+                 com_ratios: np.ndarray, weighted: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """The whole body's COM c (2,) and its Jacobian J_c (2, n), mass-weighted (or, with
+    ``weighted=False``, the plain average of the links')."""
+    joints, coms = chain_points(joint_angles, lengths, com_ratios)
+    w = masses / masses.sum() if weighted else np.full(len(masses), 1 / len(masses))
+    J = sum(wi * point_jacobian(joints, c, i) for i, (wi, c) in enumerate(zip(w, coms,
+                                                                            strict=True)))
+    return w @ coms, np.asarray(J)
+
+
+def balance_formula(joint_angles: np.ndarray, lengths: np.ndarray, masses: np.ndarray,
+                    com_ratios: np.ndarray, com_target: np.ndarray, com_velocity: np.ndarray,
+                    kp: float, kd: float, *, point: str = "com", transpose: str = "T"
+                    ) -> np.ndarray:
+    """τ = J_cᵀ f, and the mistakes: ``point`` "tip" (the top joint's Jacobian), "top" (the
+    top link's COM), "average" (the links' COM Jacobians unweighted); ``transpose`` "pinv"."""
+    c, J = com_jacobian(joint_angles, lengths, masses, com_ratios)
+    f = kp * (com_target - c) - kd * com_velocity
+    joints, coms = chain_points(joint_angles, lengths, com_ratios)
+    n = len(lengths)
+    if point == "tip":
+        J = point_jacobian(joints, joints[-1], n - 1)
+    elif point == "top":
+        J = point_jacobian(joints, coms[-1], n - 1)
+    elif point == "average":
+        J = com_jacobian(joint_angles, lengths, masses, com_ratios, weighted=False)[1]
+    out: np.ndarray = np.linalg.pinv(J) @ f if transpose == "pinv" else J.T @ f
+    return out
+
+
+def balance_reference(*args: Any) -> np.ndarray:
+    return balance_formula(*args)
+
+
+def _balance_args(rng: np.random.Generator, n: int, lean: float = 0.15) -> tuple[Any, ...]:
+    angles = rng.normal(0, lean, n)
+    lengths = rng.uniform(0.3, 0.8, n)
+    masses = rng.uniform(1.0, 20.0, n)
+    ratios = rng.uniform(0.3, 0.7, n)
+    c, _ = com_jacobian(angles, lengths, masses, ratios)
+    target = np.array([rng.normal(0, 0.05), c[1]])
+    return (angles, lengths, masses, ratios, target, rng.normal(0, 0.3, 2),
+            float(rng.uniform(100, 1000)), float(rng.uniform(10, 100)))
+
+
+def balance_random(rng: np.random.Generator) -> list[Case]:
+    return [Case(f"a standing chain of {n} links", _balance_args(rng, n)) for n in (2, 3, 4, 5, 6)]
+
+
+def balance_edges(rng: np.random.Generator) -> list[Case]:
+    one = _balance_args(rng, 1)
+    upright = list(_balance_args(rng, 3))
+    upright[0] = np.zeros(3)
+    still = list(_balance_args(rng, 4))
+    still[5] = np.zeros(2)
+    return [
+        Case("one link (an inverted pendulum)", one),
+        Case("standing straight up", tuple(upright)),
+        Case("at rest (ċ = 0)", tuple(still)),
+        Case("a deep bend (joint angles up to 1 rad)", _balance_args(rng, 4, lean=0.8)),
+    ]
+
+
+def balance_hidden(rng: np.random.Generator) -> list[Case]:
+    return [Case(f"hidden chain #{i + 1}", _balance_args(rng, int(rng.integers(2, 8))))
+            for i in range(6)]
+
+
+# --- the catalogue of known mistakes -----------------------------------------------------------
+
+MISCONCEPTIONS = (
+    Misconception(
+        "omega_body_inertia", "rigid_body_step", "ω from the body-frame inertia (I₀⁻¹ L)",
+        "Your orientation turned with ω = I₀⁻¹ L⁺. L is in the WORLD frame and I₀ in the BODY "
+        "frame: rotate the inertia first, I = R I₀ Rᵀ, so ω = R I₀⁻¹ Rᵀ L⁺ (R from q at the "
+        "start of the step). Only at R = I do the two agree.",
+        wrong=_variant(omega="body")),
+    Misconception(
+        "inertia_rotated_wrong_way", "rigid_body_step", "the inertia rotated the wrong way "
+        "(Rᵀ I₀ R)",
+        "Your orientation turned with ω = Rᵀ I₀⁻¹ R L⁺: the inertia taken to the world as "
+        "Rᵀ I₀ R. R maps body to world, so I = R I₀ Rᵀ and ω = R I₀⁻¹ Rᵀ L⁺ (into the body "
+        "frame with Rᵀ, through I₀⁻¹, back with R).",
+        wrong=_variant(omega="transposed")),
+    Misconception(
+        "not_renormalised", "rigid_body_step", "q⁺ not renormalised",
+        "q + (h/2)[0, ω]⊗q is a little longer than 1 (by about h²|ω|²/8): divide it by its "
+        "norm, q⁺ = q⁺/‖q⁺‖, every step, or the orientation stops being a rotation.",
+        wrong=_variant(renormalise=False)),
+    Misconception(
+        "explicit", "rigid_body_step", "x moved with the old velocity (explicit Euler)",
+        "Semi-implicit Euler updates the velocity first and moves with the NEW one: "
+        "v⁺ = v + h f/m, then x⁺ = x + h v⁺. Yours is x⁺ = x + h v, explicit Euler's (it "
+        "does not keep energy bounded).",
+        symptom=_explicit),
+    Misconception(
+        "kd_sign", "pd_torque", "the damping with the wrong sign (+k_d ω)",
+        "Damping opposes the motion: τ = k_p r - k_d ω. Yours adds k_d ω, which feeds the "
+        "joint's velocity back into it and makes it oscillate ever more (it diverges).",
+        wrong=lambda *a: pd_formula(*a, kd_sign=1.0)),
+    Misconception(
+        "limit_ignored", "pd_torque", "the torque limit ignored",
+        "Each component of τ must be clipped to [-limit, limit]: np.clip(τ, -limit, limit). "
+        "Yours returns the unclipped k_p r - k_d ω where a joint is far from its target.",
+        wrong=lambda *a: pd_formula(*a, clip=False)),
+    Misconception(
+        "error_world_frame", "pd_torque", "the error q̄ q⁻¹ (the world frame)",
+        "The error is the turn from q to q̄ in the joint's own frame, where ω and τ are: "
+        "q⁻¹ q̄ (q times it is q̄). q̄ q⁻¹ is the same turn expressed in the parent's frame; the "
+        "two agree only at q = identity (quaternion products do not commute).",
+        wrong=lambda *a: pd_formula(*a, world=True)),
+    Misconception(
+        "no_shortest_path", "pd_torque", "no shortest path (q̄ and -q̄ treated differently)",
+        "q̄ and -q̄ are the same target, but 2 log(d) of d = q⁻¹ q̄ with w < 0 is a turn of "
+        "more than π, the long way round: flip d ← -d when its w < 0 before taking the "
+        "rotation vector.",
+        wrong=lambda *a: pd_formula(*a, shortest=False)),
+    Misconception(
+        "half_angle", "pd_torque", "half the angle (log d, not 2 log d)",
+        "log d = (θ/2) u for d = (cos θ/2, sin θ/2 u): the rotation vector of the error is "
+        "θ u = 2 log d. Yours drives the joint with half its error.",
+        wrong=lambda *a: pd_formula(*a, factor=1.0)),
+    Misconception(
+        "tip_jacobian", "balance_torque", "Jᵀ of the chain's tip, not of the centre of mass",
+        "The force f acts on the centre of mass c, so τ = J_cᵀ f with J_c = ∂c/∂θ. Yours uses "
+        "the Jacobian of the top of the chain (the end effector), which weighs every joint by "
+        "its lever arm to the tip, not to the body's mass.",
+        wrong=lambda *a: balance_formula(*a, point="tip")),
+    Misconception(
+        "top_link_jacobian", "balance_torque", "Jᵀ of the top link's centre of mass only",
+        "J_c is the Jacobian of the WHOLE body's centre of mass, c = Σ m_i c_i / M: "
+        "J_c = Σ m_i J_{c_i} / M, every link's COM Jacobian weighted by its mass. Yours uses "
+        "the top link's J_{c_n} alone.",
+        wrong=lambda *a: balance_formula(*a, point="top")),
+    Misconception(
+        "unweighted_average", "balance_torque", "the links' COM Jacobians averaged without "
+        "their masses",
+        "c = Σ m_i c_i / M weights each link by its mass, so J_c = Σ m_i J_{c_i} / M. Yours "
+        "averages the J_{c_i} equally (Σ J_{c_i} / n): right only when all links weigh the "
+        "same.",
+        wrong=lambda *a: balance_formula(*a, point="average")),
+    Misconception(
+        "pseudo_inverse", "balance_torque", "J⁺ f (inverse kinematics) instead of Jᵀ f",
+        "A force f at the COM is produced by the joint torques τ = J_cᵀ f (virtual work: "
+        "τ·dθ = f·dc). Yours solves J_c dθ = f with the pseudo-inverse, which is inverse "
+        "kinematics' velocity map, not a torque.",
+        wrong=lambda *a: balance_formula(*a, transpose="pinv")),
+)
+
+
+# --- the assignment ----------------------------------------------------------------------------
+
+
+class VectorsCheck(Check):
+    """(J, 3) torques, one row per joint, named by row."""
+
+    def compare(self, got: np.ndarray, expected: np.ndarray) -> str | None:
+        err = np.abs(np.subtract(got, expected))
+        tol = self.atol + self.rtol * np.abs(expected)
+        bad = np.flatnonzero(np.any(np.reshape(err > tol, (len(err), -1)), axis=1))
+        if not bad.size:
+            return None
+        i = int(bad[0])
+        digits = self.decimals(got[i], expected[i])
+        more = f"; {bad.size} of {len(err)} rows are off" if bad.size > 1 else ""
+        return (f"{self.noun} {i} is {show(got[i], digits)}, expected "
+                f"{show(expected[i], digits)}{more}")
+
+
+_STEP_CHECK = TupleCheck((Check((3,), atol=1e-9, rtol=1e-9), Check((3,), atol=1e-9, rtol=1e-9),
+                          QuatCheck(atol=1e-9), Check((3,), atol=1e-9, rtol=1e-9)),
+                         ("x", "v", "q", "L"))
+
+_FUNCTIONS = (
+    Function("rigid_body_step",
+             ("x", "v", "q", "L", "mass", "inertia_body", "force", "torque", "h"),
+             step_reference, _STEP_CHECK),
+    Function("pd_torque", ("q", "q_bar", "omega", "kp", "kd", "limit"), pd_reference,
+             VectorsCheck(None, atol=1e-7, rtol=1e-9, noun="joint")),
+    Function("balance_torque",
+             ("joint_angles", "lengths", "masses", "com_ratios", "com_target", "com_velocity",
+              "kp", "kd"),
+             balance_reference, Check(None, atol=1e-7, rtol=1e-9, noun="torques")),
+)
+
+ASSIGNMENT = Assignment(
+    key="a6",
+    title="Rigid bodies and joint control",
+    template="a6_physics.py",
+    functions=_FUNCTIONS,
+    tests=(
+        *random_edge_hidden("rigid_body_step", step_random, step_edges, step_hidden),
+        *random_edge_hidden("pd_torque", pd_random, pd_edges, pd_hidden),
+        *random_edge_hidden("balance_torque", balance_random, balance_edges, balance_hidden),
+    ),
+    misconceptions=MISCONCEPTIONS,
+)

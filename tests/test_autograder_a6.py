@@ -1,0 +1,133 @@
+"""The a6 (rigid body, PD torque, balance torque) autograder: its references against
+independent ones (the step written out, the rotation vector, finite differences of the
+centre of mass), the cases that separate the mistakes, and hostile submissions."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+from grading_fixtures import FIXTURES, LIMITS, fixture_submission, seed, visible_cases
+
+from autograder import check
+from autograder.assignments import load
+from autograder.assignments.a6 import (
+    balance_formula,
+    chain_points,
+    com_jacobian,
+    pd_formula,
+    step_formula,
+)
+from course.physics.rigid_body import RigidState, simulate_rigid, t_handle
+
+REPO = Path(__file__).resolve().parents[1]
+A6 = load("a6")
+
+
+def test_the_step_reference_is_the_step_written_out():
+    fn = A6.function("rigid_body_step")
+    for c in visible_cases(A6, "rigid_body_step"):
+        expected = fn.reference(*c.args)
+        assert fn.check.close(step_formula(*c.args), expected), c.label
+        assert abs(np.linalg.norm(expected[2]) - 1) < 1e-12
+    no_torque = next(c for c in visible_cases(A6, "rigid_body_step") if "no torque" in c.label)
+    np.testing.assert_array_equal(fn.reference(*no_torque.args)[3], no_torque.args[3])
+
+
+def test_the_step_keeps_l_and_unit_q_and_energy_drifts_at_first_order():
+    """Many steps of the reference with no torque: L exactly conserved, |q| = 1, and the
+    kinetic energy's drift halves (about) when h halves."""
+    body = t_handle()
+    q = np.array([1.0, 0.0, 0.0, 0.0])
+    L = body.inertia @ np.array([0.3, 2.0, 0.1])
+    drift = []
+    for h in (2e-3, 1e-3):
+        state = RigidState.create(x=np.zeros(3), v=np.zeros(3), q=q, L=L)
+        traj = simulate_rigid(body, state, h, int(round(0.5 / h)), method="symplectic",
+                              rotation="quaternion", gravity=np.zeros(3))
+        np.testing.assert_allclose(traj.L, np.broadcast_to(L, traj.L.shape), atol=1e-12)
+        np.testing.assert_allclose(np.linalg.norm(traj.q, axis=-1), 1.0, atol=1e-12)
+        e = traj.energy.total
+        drift.append(float(np.max(np.abs(e - e[0]))))
+        fn = A6.function("rigid_body_step").reference
+        one = fn(np.zeros(3), np.zeros(3), q, L, body.mass, body.inertia, np.zeros(3),
+                 np.zeros(3), h)
+        np.testing.assert_allclose(one[2], traj.q[1], atol=1e-14)
+    assert 1.5 < drift[0] / drift[1] < 2.5, drift
+
+
+def test_the_pd_reference_is_the_rotation_vector_taken_the_short_way():
+    fn = A6.function("pd_torque")
+    flips = 0
+    for c in visible_cases(A6, "pd_torque"):
+        expected = fn.reference(*c.args)
+        np.testing.assert_allclose(pd_formula(*c.args), expected, atol=1e-10)
+        q, q_bar, *rest = c.args
+        np.testing.assert_allclose(fn.reference(q, -q_bar, *rest), expected, atol=1e-10)
+        flips += int(not np.allclose(pd_formula(*c.args, shortest=False), expected))
+    assert flips >= 6
+    q = np.array([[1.0, 0, 0, 0]])
+    turn = np.array([[np.cos(0.4), 0, 0, np.sin(0.4)]])  # 0.8 rad about z
+    np.testing.assert_allclose(fn.reference(q, turn, np.zeros((1, 3)), 10.0, 1.0, 100.0),
+                               [[0.0, 0.0, 8.0]], atol=1e-12)
+
+
+def test_the_com_jacobian_is_its_finite_differences_and_the_torque_its_transpose():
+    for c in visible_cases(A6, "balance_torque"):
+        angles, lengths, masses, ratios = c.args[:4]
+        _, J = com_jacobian(angles, lengths, masses, ratios)
+        eps = 1e-6
+        for j in range(len(angles)):
+            d = np.zeros(len(angles))
+            d[j] = eps
+            fd = (com_jacobian(angles + d, lengths, masses, ratios)[0]
+                  - com_jacobian(angles - d, lengths, masses, ratios)[0]) / (2 * eps)
+            np.testing.assert_allclose(J[:, j], fd, atol=1e-8)
+        joints, _ = chain_points(angles, lengths, ratios)
+        np.testing.assert_allclose(np.linalg.norm(np.diff(joints, axis=0), axis=1), lengths)
+        f = c.args[6] * (c.args[4] - com_jacobian(*c.args[:4])[0]) - c.args[7] * c.args[5]
+        np.testing.assert_allclose(balance_formula(*c.args), J.T @ f, atol=1e-12)
+
+
+def test_balance_torques_hold_a_pushed_chain_and_the_tip_jacobian_does_less():
+    """What the torque achieves: on a 3-link chain with unit joint inertias (a crude but
+    independent plant), the COM error after 2 s of J_cᵀ f feedback from a push is smaller
+    than at the start."""
+    args = next(c for c in visible_cases(A6, "balance_torque") if "3 links" in c.label).args
+    _, lengths, masses, ratios, _, _, kp, kd = args
+    target = com_jacobian(np.zeros(3), lengths, masses, ratios)[0]
+    theta, dtheta, h = np.array([0.1, -0.05, 0.08]), np.zeros(3), 1e-3
+    start = np.linalg.norm(com_jacobian(theta, lengths, masses, ratios)[0] - target)
+    for _ in range(2000):
+        c, J = com_jacobian(theta, lengths, masses, ratios)
+        tau = balance_formula(theta, lengths, masses, ratios, target, J @ dtheta, kp / 10,
+                              kd / 10)
+        dtheta += h * (tau - 2.0 * dtheta)
+        theta += h * dtheta
+    end = np.linalg.norm(com_jacobian(theta, lengths, masses, ratios)[0] - target)
+    assert end < 0.2 * start, (start, end)
+
+
+def test_the_reference_check_is_quick(tmp_path):
+    start = time.perf_counter()
+    result = check("a6", FIXTURES / "a6" / "reference.py", seed=seed("a6"), limits=LIMITS)
+    assert result.score == result.max_score
+    assert time.perf_counter() - start < 3.0
+
+
+def test_running_the_course_library_is_refused(tmp_path):
+    src = fixture_submission("a6", "adv_reads_the_library.py", tmp_path)
+    src.write_text(src.read_text().replace("@REPO@", str(REPO)))
+    result = check("a6", src, limits=LIMITS)
+    step = [t for t in result.tests if t.test.function == "rigid_body_step"]
+    assert all(t.n_passed == 0 for t in step)
+    assert (f"does not let submissions open '{REPO}/course/physics/rigid_body.py'"
+            in " ".join(str(result).split()))
+
+
+def test_scipy_is_refused_before_anything_runs():
+    result = check("a6", FIXTURES / "a6" / "adv_import_scipy.py", limits=LIMITS)
+    assert result.score == 0
+    assert ("`from scipy.spatial.transform import ...` is not allowed: the assignment asks you "
+            "to implement the math yourself with numpy") in " ".join(str(result).split())
