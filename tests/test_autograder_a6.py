@@ -16,6 +16,9 @@ from autograder.assignments.a6 import (
     balance_formula,
     chain_points,
     com_jacobian,
+    drive_rates,
+    drive_verdict,
+    is_drive_case,
     pd_formula,
     step_formula,
 )
@@ -90,7 +93,7 @@ def test_the_com_jacobian_is_its_finite_differences_and_the_torque_its_transpose
         np.testing.assert_allclose(balance_formula(*c.args), J.T @ f, atol=1e-12)
 
 
-def test_balance_torques_hold_a_pushed_chain_and_the_tip_jacobian_does_less():
+def test_balance_torques_bring_a_pushed_chain_back():
     """What the torque achieves: on a 3-link chain with unit joint inertias (a crude but
     independent plant), the COM error after 2 s of J_cᵀ f feedback from a push is smaller
     than at the start."""
@@ -131,3 +134,22 @@ def test_scipy_is_refused_before_anything_runs():
     assert result.score == 0
     assert ("`from scipy.spatial.transform import ...` is not allowed: the assignment asks you "
             "to implement the math yourself with numpy") in " ".join(str(result).split())
+
+
+def test_the_drive_cases_measure_the_torque_law_and_judge_the_closed_loop():
+    """On the drive cases the reference's central differences are k_p I and k_d I (a stable
+    loop); +k_d ω makes the same joint diverge, and the judge says so."""
+    fn = A6.function("pd_torque")
+    cases = [c for c in visible_cases(A6, "pd_torque") if is_drive_case(c.args)]
+    assert len(cases) == 4
+    assert len([c for c in visible_cases(A6, "pd_torque") if not is_drive_case(c.args)]) == 10
+    for c in cases:
+        got = fn.reference(*c.args)
+        tau0, Kp, Kd, lam = drive_rates(got)
+        kp, kd = c.args[3], c.args[4]
+        np.testing.assert_allclose(tau0, 0.0, atol=1e-9)
+        np.testing.assert_allclose(Kp, kp * np.eye(3), atol=1e-5 * kp)
+        np.testing.assert_allclose(Kd, kd * np.eye(3), atol=1e-6 * kd)
+        assert np.max(lam.real) < 0 and drive_verdict(got) is None
+        wrong = pd_formula(*c.args, kd_sign=1.0)
+        assert "it diverges" in fn.check.judge(wrong, got, c.args)

@@ -28,7 +28,7 @@ from course import rotations as rot
 from course.physics.rigid_body import RigidBody, RigidState, step_rigid, t_handle
 
 from ..checks import Check, QuatCheck, TupleCheck, show
-from ..spec import Assignment, Case, Function, Misconception, random_edge_hidden
+from ..spec import Assignment, Case, Function, Misconception, Test, random_edge_hidden
 
 # --- the rigid-body step -----------------------------------------------------------------------
 
@@ -211,6 +211,72 @@ def pd_hidden(rng: np.random.Generator) -> list[Case]:
             for i in range(8)]
 
 
+DRIVE_EPS = 1e-4  # rad and rad/s: the nudges the drive cases measure the torque law with
+JOINT_INERTIA = np.diag([0.1, 0.15, 0.2])  # kg m²: the joint the grader drives (body frame)
+
+
+def drive_args(rng: np.random.Generator, spread: float, stored_negated: bool) -> tuple[Any, ...]:
+    """A drive case: one target q̄ (12 rows), the joint turned ±DRIVE_EPS off it about each
+    axis of its own frame (rows 0-5), and turned DRIVE_EPS about (1, 1, 1)/√3 off it
+    spinning ±DRIVE_EPS about each axis (rows 6-11; never exactly at the target, where
+    q⁻¹(-q̄) = -1 has no axis and rounding picks one). The torques there are the torque law
+    near the target: τ ≈ τ₀ + K_p r - K_d ω."""
+    q_bar = rot.quat_from_rotvec(rng.normal(0, spread, 3))
+    nudges = rot.quat_from_rotvec(np.vstack([-DRIVE_EPS * np.eye(3), DRIVE_EPS * np.eye(3)]))
+    off = rot.quat_mul(q_bar, rot.quat_from_rotvec(-DRIVE_EPS * np.ones(3) / np.sqrt(3)))
+    q = np.vstack([rot.quat_mul(q_bar, nudges), np.tile(off, (6, 1))])
+    omega = np.vstack([np.zeros((6, 3)), DRIVE_EPS * np.eye(3), -DRIVE_EPS * np.eye(3)])
+    target = np.tile(-q_bar if stored_negated else q_bar, (12, 1))
+    return q, target, omega, float(rng.uniform(20, 200)), float(rng.uniform(0.5, 5.0)), 1e6
+
+
+def is_drive_case(args: tuple[Any, ...]) -> bool:
+    q, q_bar, omega = (np.asarray(a) for a in args[:3])
+    return bool(q.shape == (12, 4) and np.all(q_bar == q_bar[0]) and np.all(omega[:6] == 0)
+                and np.all(q[6:] == q[6])
+                and np.array_equal(omega[6:], DRIVE_EPS * np.vstack([np.eye(3), -np.eye(3)])))
+
+
+def drive_rates(got: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The closed loop of the joint JOINT_INERTIA driven by the torques ``got`` of a drive
+    case: ``(τ₀, K_p, K_d, eigenvalues)`` of ṙ = -ω, I ω̇ = τ₀ + K_p r - K_d ω (small errors),
+    by central differences."""
+    tau0 = got[:6].mean(axis=0)
+    Kp = (got[0:3] - got[3:6]).T / (2 * DRIVE_EPS)
+    Kd = -(got[6:9] - got[9:12]).T / (2 * DRIVE_EPS)
+    inv = np.linalg.inv(JOINT_INERTIA)
+    A = np.block([[np.zeros((3, 3)), -np.eye(3)], [inv @ Kp, -inv @ Kd]])
+    return tau0, Kp, Kd, np.linalg.eigvals(A)
+
+
+def drive_verdict(got: np.ndarray) -> str | None:
+    """None if the joint driven by these torques settles on its target, else what it does."""
+    tau0, _, _, lam = drive_rates(got)
+    if np.max(np.abs(tau0)) > 1e-6:
+        return (f"at its target and still, the joint gets a torque of about {show(tau0)}: it "
+                "is pushed away from where it should rest")
+    worst = lam[np.argmax(lam.real)]
+    if worst.real < -1e-3:
+        return None
+    if worst.real <= 1e-3:
+        return ("a joint driven by your torques never settles: it swings about its target "
+                "forever (no damping)")
+    how = ("swings about its target ever wider" if abs(worst.imag) > 1e-9
+           else "runs away from its target")
+    return (f"a joint driven by your torques (inertia diag(0.1, 0.15, 0.2) kg m², a small "
+            f"error to start) {how}: its error grows like e^({worst.real:.3g} t), it diverges")
+
+
+def pd_drive(rng: np.random.Generator) -> list[Case]:
+    return [
+        Case("a joint near its target settles (target turned 0.5 rad from rest)",
+             drive_args(rng, 0.3, False)),
+        Case("the same, the target stored as -q̄", drive_args(rng, 0.3, True)),
+        Case("a target turned far from rest (about 2.5 rad)", drive_args(rng, 1.5, False)),
+        Case("a target turned far from rest, stored as -q̄", drive_args(rng, 1.5, True)),
+    ]
+
+
 # --- the balance torque ------------------------------------------------------------------------
 
 
@@ -389,7 +455,13 @@ MISCONCEPTIONS = (
 
 
 class VectorsCheck(Check):
-    """(J, 3) torques, one row per joint, named by row."""
+    """(J, 3) torques, one row per joint, named by row; the drive cases
+    (:func:`is_drive_case`) are judged by what the torques achieve."""
+
+    def judge(self, got: Any, expected: Any, args: tuple[Any, ...]) -> str | None:
+        if is_drive_case(args):
+            return drive_verdict(np.asarray(got, dtype=float))
+        return self.compare(got, expected)
 
     def compare(self, got: np.ndarray, expected: np.ndarray) -> str | None:
         err = np.abs(np.subtract(got, expected))
@@ -428,6 +500,7 @@ ASSIGNMENT = Assignment(
     tests=(
         *random_edge_hidden("rigid_body_step", step_random, step_edges, step_hidden),
         *random_edge_hidden("pd_torque", pd_random, pd_edges, pd_hidden),
+        Test("pd_torque: a joint driven to its target", "pd_torque", 1.0, pd_drive),
         *random_edge_hidden("balance_torque", balance_random, balance_edges, balance_hidden),
     ),
     misconceptions=MISCONCEPTIONS,
