@@ -476,8 +476,21 @@ class VectorsCheck(Check):
                 f"{show(expected[i], digits)}{more}")
 
 
+class UnitQuatCheck(QuatCheck):
+    """q⁺: off the unit sphere by 1e-4 is a mistake here, so the norm is shown to the digit
+    that differs (QuatCheck's |q| = 1.000 would hide it)."""
+
+    def compare(self, got: np.ndarray, expected: np.ndarray,
+                name: Any = None) -> str | None:
+        norm = float(np.linalg.norm(got))
+        if abs(norm - 1.0) > self.atol:
+            return (f"is not a unit quaternion: |q| - 1 = {norm - 1.0:.2g}; rotations need "
+                    "|q| = 1")
+        return super().compare(got, expected, name)
+
+
 _STEP_CHECK = TupleCheck((Check((3,), atol=1e-9, rtol=1e-9), Check((3,), atol=1e-9, rtol=1e-9),
-                          QuatCheck(atol=1e-9), Check((3,), atol=1e-9, rtol=1e-9)),
+                          UnitQuatCheck(atol=1e-9), Check((3,), atol=1e-9, rtol=1e-9)),
                          ("x", "v", "q", "L"))
 
 _FUNCTIONS = (
