@@ -157,8 +157,10 @@ def standing_pose(character: Character) -> Motion:
        rotation that makes it horizontal, so the whole foot lies flat;
     2. the body is tilted as a whole (the root's rotation, the ankles turned back so the feet
        stay flat) until the COM (MuJoCo's ``subtree_com``) is straight above the centre of the
-       feet (:func:`support_centre`): five fixed-point steps, the tilt moving the COM
-       horizontally by ``L ω`` for a COM height ``L`` above the ankles;
+       feet (:func:`support_centre`), and the legs alone are rolled sideways (the roll is
+       undone at the root's other children) until both ankles are at one height (the CMU
+       skeleton's legs differ by about 5 mm): Newton's method on these three angles with a
+       finite-difference Jacobian, to 1e-9 m;
     3. the root is placed so the feet's centre is above the origin and the lowest foot joint
        at height 0 (the clip ground of :func:`~course.physics.character.build_model`, whose
        floor is one capsule radius lower, so the foot capsules rest on it).
@@ -182,15 +184,25 @@ def standing_pose(character: Character) -> Motion:
             level[j] = _rotation_between(d, flat) if np.linalg.norm(flat) > 1e-9 else np.array(
                 [1.0, 0.0, 0.0, 0.0]
             )
-    tilt = np.zeros(3)
+    legs = {a for chain in feet for a in _ancestors(skel, chain[0])}
+    upper = [c for c in skel.children(0) if c not in legs]
     data = mujoco.MjData(character.model)
-    motion = Motion(skel, local, np.zeros((1, 3)), 1.0 / 60.0, name="standing")
     up = np.array([0.0, 1.0, 0.0])
-    for _ in range(6):
-        local[0, 0] = _rotvec_quat(tilt)
+    rest = skel.rest_positions()
+    side = (rest[feet[1][0]] - rest[feet[0][0]]) * np.array([1.0, 0.0, 1.0])
+    forward = np.cross(side, up) / np.linalg.norm(side)  # roll axis, horizontal
+
+    def make(params: Array) -> tuple[Motion, Array]:
+        tilt = np.array([params[0], 0.0, params[1]])
+        roll = params[2] * forward
+        local[0, 0] = _qmul(_rotvec_quat(tilt), _rotvec_quat(roll))
+        for c in upper:  # the roll is for the legs: the upper body keeps the tilt only
+            local[0, c] = _qinv(_rotvec_quat(roll))
         # feet flat whatever the tilt: local = parent's global^-1 * wanted global
+        bare = Motion(skel, local.copy(), np.zeros((1, 3)), 1.0 / 60.0)
+        _, rotations = bare.forward_kinematics()
         for chain in feet:
-            g_parent = _global(motion, skel.parents[chain[0]])
+            g_parent = rotations[0, skel.parents[chain[0]]]
             for j in chain[:-1]:
                 local[0, j] = _qmul(_qinv(g_parent), level[j])
                 g_parent = level[j]
@@ -204,17 +216,31 @@ def standing_pose(character: Character) -> Motion:
         data.qpos[:] = qpos_from_motion(character, motion)[0]
         mujoco.mj_kinematics(character.model, data)
         mujoco.mj_comPos(character.model, data)
-        com = _com_y_up(character, data)
-        sup = support_centre(character, motion)
-        offset = (com - sup) * np.array([1.0, 0.0, 1.0])
-        height = float(com[1] - sup[1])
-        tilt = tilt + np.cross(up, -offset) / height
+        offset = _com_y_up(character, data) - support_centre(character, motion)
+        ankles = positions[0, [feet[0][0], feet[1][0]], 1] * character.scale
+        return motion, np.array([offset[0], offset[2], ankles[1] - ankles[0]])
+
+    # Newton on (tilt about x, tilt about z, roll) with a finite-difference Jacobian
+    params = np.zeros(3)
+    for _ in range(6):
+        motion, r = make(params)
+        if np.abs(r).max() < 1e-9:
+            break
+        jac = np.empty((3, 3))
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1e-6
+            jac[:, k] = (make(params + e)[1] - r) / 1e-6
+        params = params - np.linalg.solve(jac, r)
+    motion, _ = make(params)
     return motion
 
 
-def _global(motion: Motion, j: int) -> Array:
-    _, rotations = motion.forward_kinematics()
-    out: Array = np.asarray(rotations[0, j], dtype=float)
+def _ancestors(skel: Any, j: int) -> list[int]:
+    out = []
+    while j > 0:
+        out.append(j)
+        j = skel.parents[j]
     return out
 
 
@@ -316,8 +342,8 @@ def stand(
     kp: float = 1000.0,
     kd: float = 5.0,
     controller: str = "com",
-    com_kp: float = 2000.0,
-    com_kd: float = 300.0,
+    com_kp: float = 1000.0,
+    com_kd: float = 200.0,
     gravity_compensation: bool | None = None,
     torque_limit: float = 400.0,
     push: Push | None = None,

@@ -197,8 +197,10 @@ def build_model(
         slightly while it pushes back). ``True`` is :data:`JOINT_LIMIT`, 135 degrees: the
         CMU walk's largest joint rotation is 97 degrees (the arms, lowered from the T-pose
         rest), so the limit never binds while a clip is tracked, and 135 degrees is about a
-        knee's anatomical flexion, so a push cannot fold a joint through the body. ``False``:
-        no limits.
+        knee's anatomical flexion, so a push cannot fold a joint through the body. The limit
+        is stiffened (``solreflimit="0.005 1"``, a 5 ms time constant instead of MuJoCo's
+        20 ms): a 1500 N push on the sample's head then overshoots a 30 degree cone by
+        3.4 degrees instead of 12.7. ``False``: no limits.
 
     Returns
     -------
@@ -230,7 +232,7 @@ def build_model(
         kind = "free" if j == 0 else "ball"
         extra = "" if j == 0 else f' armature="{armature:.9g}"'
         if j > 0 and limit is not None:
-            extra += f' limited="true" range="0 {limit:.9g}"'
+            extra += f' limited="true" range="0 {limit:.9g}" solreflimit="0.005 1"'
         lines.append(f'{indent}  <joint name="{name}" type="{kind}"{extra}/>')
         lines.append(f'{indent}  <geom name="{name}" type="sphere" size="{radius:.9g}"/>')
         for c in skeleton.children(j):
