@@ -369,6 +369,23 @@ def balance_hidden(rng: np.random.Generator) -> list[Case]:
             for i in range(6)]
 
 
+def _not_transposed(*args: Any) -> np.ndarray:
+    """J_c f: defined only where J_c is square (two links); elsewhere the product raises."""
+    c, J = com_jacobian(*args[:4])
+    if J.shape[1] != 2:
+        raise ValueError("J f is undefined: J is (2, n)")
+    out: np.ndarray = J @ (args[6] * (args[4] - c) - args[7] * args[5])
+    return out
+
+
+def _shape_error(error: dict[str, Any], *args: Any) -> str | None:
+    if error.get("type") != "ValueError" or "matmul" not in str(error.get("message", "")):
+        return None
+    n = len(args[0])
+    return (f"J_c is (2, {n}) and f is (2,): J_c @ f does not exist; the torques are "
+            f"J_c.T @ f, shape ({n},)")
+
+
 # --- the catalogue of known mistakes -----------------------------------------------------------
 
 MISCONCEPTIONS = (
@@ -442,6 +459,12 @@ MISCONCEPTIONS = (
         "averages the J_{c_i} equally (Σ J_{c_i} / n): right only when all links weigh the "
         "same.",
         wrong=lambda *a: balance_formula(*a, point="average")),
+    Misconception(
+        "not_transposed", "balance_torque", "J f instead of Jᵀ f",
+        "τ = J_cᵀ f: J_c is (2, n), one column per joint, and each joint's torque is its "
+        "column dotted with f. J_c @ f only exists for a square J_c (two links), and mixes the "
+        "joints' columns there; write J_c.T @ f.",
+        wrong=_not_transposed, explains=_shape_error),
     Misconception(
         "pseudo_inverse", "balance_torque", "J⁺ f (inverse kinematics) instead of Jᵀ f",
         "A force f at the COM is produced by the joint torques τ = J_cᵀ f (virtual work: "
