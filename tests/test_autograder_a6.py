@@ -153,3 +153,13 @@ def test_the_drive_cases_measure_the_torque_law_and_judge_the_closed_loop():
         assert np.max(lam.real) < 0 and drive_verdict(got) is None
         wrong = pd_formula(*c.args, kd_sign=1.0)
         assert "it diverges" in fn.check.judge(wrong, got, c.args)
+
+
+def test_minus_q_is_the_same_step_and_a_wrong_inertia_is_not():
+    fn = A6.function("rigid_body_step")
+    for c in visible_cases(A6, "rigid_body_step"):
+        x, v, q, L = fn.reference(*c.args)
+        assert fn.check.judge((x, v, -q, L), (x, v, q, L), c.args) is None, c.label
+        if c.args[2][0] != 1.0:  # away from the identity the body-frame ω shows
+            body = step_formula(*c.args, omega="body")
+            assert "q is a different rotation" in fn.check.judge(body, (x, v, q, L), c.args)
