@@ -163,3 +163,14 @@ def test_minus_q_is_the_same_step_and_a_wrong_inertia_is_not():
         if c.args[2][0] != 1.0:  # away from the identity the body-frame ω shows
             body = step_formula(*c.args, omega="body")
             assert "q is a different rotation" in fn.check.judge(body, (x, v, q, L), c.args)
+
+
+def test_the_notebook_beside_a_right_solution_scores_full_marks(tmp_path):
+    """The notebook's display code names nothing a solution's helpers are likely called
+    (its demo chain is ``pose_of``, not ``chain``): graded with it, the solution keeps 7/7."""
+    import shutil
+
+    shutil.copy(REPO / "assignments" / "a6_physics.ipynb", tmp_path)
+    shutil.copy(FIXTURES / "a6" / "reference.py", tmp_path / "a6_physics.py")
+    result = check("a6", tmp_path / "a6_physics.ipynb", limits=LIMITS)
+    assert not result.problems and result.score == result.max_score == 7
