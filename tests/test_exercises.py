@@ -318,3 +318,55 @@ def test_the_uniform_catmull_rom_tangent_is_named_as_in_a5():
     assert feedback.status == "fail"
     assert UNIFORM_TANGENT[0] in feedback.text
     assert "divided by the time between the two neighbours" in feedback.text
+
+
+def _one_dof_grows(inertia: float, h: float, kp: float, kd: float, steps: int = 4000) -> bool:
+    """A 1-DOF joint under explicit PD, stepped by semi-implicit Euler (MuJoCo's Euler):
+    whether its error grows a thousandfold within ``steps`` steps (a stable undamped joint
+    near the bound swings on a long, thin ellipse: bounded, but far from 1)."""
+    x, v = 1.0, 0.0
+    for _ in range(steps):
+        v += h * (-kp * x - kd * v) / inertia
+        x += h * v
+        if abs(x) > 1e3:
+            return True
+    return False
+
+
+@pytest.mark.parametrize("inertia,h,kd", [(0.01, 1 / 600, 0.0), (0.5, 1 / 120, 10.0),
+                                    (0.2, 1 / 240, 20.0), (1.3, 1 / 60, 0.0)])
+def test_kp_max_is_where_a_simulated_joint_turns_unstable(inertia, h, kd):
+    """14.kp_max's closed form against a simulated joint: 2 % under it the error decays,
+    2 % over it the error grows."""
+    kp = reference("14.kp_max")(inertia, h, kd)
+    assert not _one_dof_grows(inertia, h, 0.98 * kp, kd)
+    assert _one_dof_grows(inertia, h, 1.02 * kp, kd)
+
+
+def test_leg_torque_does_the_virtual_work_of_its_force():
+    """τ · δθ = f · δc for a small δθ (finite differences of the hip's position)."""
+    rng = np.random.default_rng(14)
+    ref = reference("14.leg_torque")
+    for _ in range(5):
+        theta, lengths = rng.uniform(0.2, 2.0, 2), rng.uniform(0.3, 0.6, 2)
+        c_bar, kp = rng.normal(size=2), 300.0
+
+        def hip(t, lengths=lengths):
+            return np.array([lengths[0] * np.cos(t[0]) + lengths[1] * np.cos(t[0] + t[1]),
+                             lengths[0] * np.sin(t[0]) + lengths[1] * np.sin(t[0] + t[1])])
+
+        f = kp * (c_bar - hip(theta))
+        d = rng.normal(size=2) * 1e-6
+        dc = (hip(theta + d) - hip(theta - d)) / 2
+        assert np.isclose(ref(theta, lengths, c_bar, kp) @ d, f @ dc, rtol=1e-6, atol=1e-12)
+
+
+def test_pd_torque_of_q_and_minus_q_targets_agree():
+    """q̄ and −q̄ are one rotation: the same torque, whose size is kp times the angle."""
+    rng = np.random.default_rng(7)
+    ref = reference("14.pd_torque")
+    for _ in range(10):
+        q, qb = (v / np.linalg.norm(v) for v in rng.normal(size=(2, 4)))
+        a, b = ref(q, qb, np.zeros(3), 2.0, 0.0), ref(q, -qb, np.zeros(3), 2.0, 0.0)
+        assert np.allclose(a, b)
+        assert np.linalg.norm(a) <= 2.0 * np.pi + 1e-9
