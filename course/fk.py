@@ -487,8 +487,42 @@ def forward_kinematics(
         _check_unit(q0[..., None, :], "root_orientation", names, joint=root)
 
     args = [("local_rotations", R, 2), ("root_position", p0, 1), ("offsets", L, 2)]
-    batch = broadcast_leading(
+    broadcast_leading(
         "forward_kinematics", *args, *([] if q0 is None else [("root_orientation", q0, 1)])
+    )
+    if np.prod(np.broadcast_shapes(R.shape[:-2], p0.shape[:-1], L.shape[:-2])) <= FLOAT_FRAMES:
+        _check_unit(R, "local_rotations", names)
+    return forward_kernel(par, L, R, p0, root=root, root_orientation=q0, names=names)
+
+
+def forward_kernel(
+    parents: NDArray[np.intp],
+    offsets: Array,
+    local_rotations: Array,
+    root_position: Array,
+    *,
+    root: int = 0,
+    root_orientation: Array | None = None,
+    names: Sequence[str] | None = None,
+) -> tuple[Array, Array]:
+    r""":func:`forward_kinematics` without its checks (正向运动学内核), for inner loops.
+
+    The caller has checked what :func:`forward_kinematics` checks: ``parents`` an int array
+    (:func:`check_parents`), ``offsets`` (J, 3) or (..., J, 3), ``local_rotations``
+    (..., J, 4) unit quaternions, ``root_position`` (..., 3), ``root_orientation`` (..., 4)
+    or None, leading shapes that broadcast. The same walk, so the same numbers bit for bit.
+    (For more than ``FLOAT_FRAMES`` frames the walk still meets each rotation's norm as it
+    copies its rows, and says so naming the joint, by ``names`` if given.)
+
+    Returns
+    -------
+    positions : ndarray, shape (..., J, 3)
+    orientations : ndarray, shape (..., J, 4)
+    """
+    par, L, R, p0, q0 = parents, offsets, local_rotations, root_position, root_orientation
+    n = len(par)
+    batch = np.broadcast_shapes(
+        R.shape[:-2], p0.shape[:-1], L.shape[:-2], *([] if q0 is None else [q0.shape[:-1]])
     )
     F = int(np.prod(batch))
 
@@ -502,7 +536,6 @@ def forward_kinematics(
     p0 = frames(p0, (3,))
     q0 = None if q0 is None else frames(q0, (4,))
     if F <= FLOAT_FRAMES:
-        _check_unit(R.reshape(batch + (n, 4)), "local_rotations", names)
         walks = [_FloatWalk(R[f], L[f] if per_frame else L) for f in range(F)]
         for f, w in enumerate(walks):
             w.walk(par, root, None if q0 is None else q0[f].tolist(), p0[f].tolist())

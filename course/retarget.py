@@ -49,17 +49,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import fk
 from ._typing import Array
 from ._validate import as_array
 from .fk import _check_unit, check_parents
 from .motion import Motion, default_channels
 from .rotations import (
-    quat_between,
-    quat_conjugate,
+    _kernels,
     quat_from_axis_angle,
     quat_from_matrix,
     quat_identity,
-    quat_mul,
     quat_rotate,
 )
 from .skeleton import Hinge, JointNotFoundError, Skeleton, Universal
@@ -232,11 +231,8 @@ def _best_rotation(d_from: list[Array], d_to: list[Array]) -> Array:
     """Unit quaternion C with C d_from[k] ~ d_to[k] (directions compared, lengths ignored)."""
     a = np.array(d_from) / np.linalg.norm(d_from, axis=1, keepdims=True)
     b = np.array(d_to) / np.linalg.norm(d_to, axis=1, keepdims=True)
-    U, S, Vt = np.linalg.svd(b.T @ a)
-    if len(a) == 1 or S[1] <= 1e-9 * S[0]:  # one direction: the shortest arc
-        return quat_between(a[0], b[0])
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
-    return quat_from_matrix(U @ D @ Vt)
+    # Kabsch (the shortest arc for one direction, or where they all lie on one line).
+    return quat_from_matrix(_kernels.best_rotation(a, b))
 
 
 def rest_corrections(
@@ -276,11 +272,10 @@ def _corrections(source: Skeleton, target: Skeleton, m: NDArray[np.intp]) -> Arr
 
 # --------------------------------------------------------------------------- retargeting
 def _globals(parents: NDArray[np.intp], R: Array) -> Array:
-    Q = np.empty_like(R)
-    Q[..., 0, :] = R[..., 0, :]
-    for i in range(1, R.shape[-2]):
-        Q[..., i, :] = quat_mul(Q[..., parents[i], :], R[..., i, :])
-    return Q
+    """Global orientations :math:`Q_i = Q_{p(i)} R_i` of checked local rotations ``R``
+    (the orientation half of the forward-kinematics kernel)."""
+    zero = np.zeros((len(parents), 3))
+    return fk.forward_kernel(parents, zero, R, np.zeros(R.shape[:-2] + (3,)))[1]
 
 
 def _retarget_rotations(
@@ -289,9 +284,11 @@ def _retarget_rotations(
     """Local rotations of the target: Q'_i = Q_from[m(i)] C_i, or Q'_parent if unmapped."""
     Q = np.empty(Q_from.shape[:-2] + (len(m), 4))
     for i, s in enumerate(m):
-        Q[..., i, :] = quat_mul(Q_from[..., s, :], C[i]) if s >= 0 else Q[..., parents_to[i], :]
+        Q[..., i, :] = (_kernels.quat_mul(Q_from[..., s, :], C[i]) if s >= 0
+                        else Q[..., parents_to[i], :])
     R: Array = Q.copy()
-    R[..., 1:, :] = quat_mul(quat_conjugate(Q[..., parents_to[1:], :]), Q[..., 1:, :])
+    conj = Q[..., parents_to[1:], :] * np.array([1.0, -1.0, -1.0, -1.0])
+    R[..., 1:, :] = _kernels.quat_mul(conj, Q[..., 1:, :])
     # An unmapped joint keeps its rest pose exactly (R'_i = I), not as Q'_p^* Q'_p rounded
     # (numpy 1.x rounds that product to 1e-15 off the identity).
     R[..., np.flatnonzero(m[1:] < 0) + 1, :] = (1.0, 0.0, 0.0, 0.0)

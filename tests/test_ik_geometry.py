@@ -133,7 +133,7 @@ def test_model_jacobian_matches_finite_differences_rerooted(shared_bvh_dir, root
     def effect(delta):
         M2, p2 = model.forward(model.step(Rn, M, base, delta[None]), base, p0)
         rot = M2[0, model.rot_effectors] @ np.swapaxes(M[0, model.rot_effectors], -1, -2)
-        from course.ik._engine.small import rotvec_from_matrix
+        from course.rotations._kernels import rotvec_from_matrix
 
         return np.concatenate([p2[0, model.effectors].ravel(), rotvec_from_matrix(rot).ravel()])
 
@@ -273,7 +273,7 @@ def test_quat_between_matches_matrix_between_including_opposite_and_zero():
     perpendicular axis) and a zero vector (the identity)."""
     from course.ik._engine.components import quat_between
     from course.ik._engine.ops import ARRAYS, FLOATS
-    from course.ik._engine.small import matrix_between
+    from course.rotations._kernels import matrix_between
 
     rng = np.random.default_rng(21)
     u = rng.normal(size=(12, 3))

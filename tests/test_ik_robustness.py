@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from course.ik import Target, solve
-from course.ik._engine.small import rotvec_from_matrix
 from course.rotations import quat_from_rotvec, quat_mul
+from course.rotations._kernels import rotvec_from_matrix
 from course.skeleton import chain
 
 BALL = chain([1.0] * 7)
@@ -164,7 +164,7 @@ def test_iteration_cap_reports_max_iterations_not_singular(method):
 def test_best_rotation_rank_one_is_the_shortest_arc():
     """Collinear offsets (and zero-length ones among them) leave a twist free; the fit takes
     the shortest arc, which keeps the previous twist, alone or in a batch."""
-    from course.ik._engine.small import best_rotation, matrix_between
+    from course.rotations._kernels import best_rotation, matrix_between
 
     rng = np.random.default_rng(5)
     B = 12

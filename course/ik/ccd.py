@@ -19,10 +19,7 @@ from numpy.typing import ArrayLike
 
 from course._typing import Array
 from course._validate import as_array
-from course.rotations import quat_between
-from course.rotations._kernels import quat_rotate
-
-from ._engine.small import TINY, norm
+from course.rotations._kernels import TINY, norm, quat_between, quat_rotate
 
 
 def ccd_positions(

@@ -36,8 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from course._typing import Array
 from course._validate import as_array
-
-from ._engine.small import TINY
+from course.rotations._kernels import TINY
 
 
 def fabrik_positions(

@@ -31,8 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from course._typing import Array
-
-from ._engine.small import cross
+from course.rotations._kernels import cross
 
 
 def chain_jacobian(pivots: ArrayLike, axes: ArrayLike, effector: ArrayLike) -> Array:

@@ -25,8 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from course._typing import Array
 from course._validate import as_array
-
-from ._engine.small import TINY, cross, dot, norm
+from course.rotations._kernels import TINY, cross, dot, norm
 
 
 def _perpendicular(u: Array) -> Array:

@@ -6,11 +6,12 @@
 * :mod:`.chain` — the fast path's model: one serial chain to one position target, on
   quaternion and vector *components* (Python floats for one problem, ``(B,)`` arrays for a
   batch, :mod:`.ops`); :mod:`.chain_solvers` runs CCD, FABRIK and the Jacobian methods on it.
-* :mod:`.small` (unchecked 3x3 linear algebra), :mod:`.components` (quaternion kernels on
-  components, and the joint-limit projection), :mod:`.history` (convergence bookkeeping) and
-  :mod:`.request` (a validated solve) are shared by both.
+* :mod:`course.rotations._kernels` (the unchecked vector, quaternion and matrix kernels),
+  :mod:`.components` (the IK step kernels on components, and the joint-limit projection),
+  :mod:`.history` (convergence bookkeeping) and :mod:`.request` (a validated solve) are
+  shared by both.
 
 Which method runs on which engine is the method's record in :mod:`course.ik.methods`. The
 engines import the lecture modules' maths (the Jacobian steps, the two-link triangle); those
-import nothing from here but the kernels of :mod:`.small`.
+import nothing from here; the kernels they share live in :mod:`course.rotations._kernels`.
 """

@@ -34,6 +34,8 @@ from typing import Any
 
 import numpy as np
 
+from course.rotations._kernels import TINY
+
 from .components import (
     Limit,
     Quat,
@@ -55,7 +57,6 @@ from .components import (
 )
 from .ops import FLOATS, Ops
 from .reach import REACH_START, reach_points
-from .small import TINY
 from .tree import bend_direction, bend_increment, outside_shell
 
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from course import fk
 from course._typing import Array
+from course.rotations._kernels import TINY
 
 from ..jacobian import lost_rank
 from .chain import SerialChain, fit_chain
@@ -41,7 +42,6 @@ from .components import (
 from .history import History
 from .ops import ARRAYS, FLOATS, Ops
 from .request import Request, Solved
-from .small import TINY
 
 
 def solve_on_chain(req: Request, solver: Any, limits: list[tuple], weighted: bool) -> Solved:
@@ -60,7 +60,7 @@ def solve_on_chain(req: Request, solver: Any, limits: list[tuple], weighted: boo
     if req.root == 0:  # the world frame is held and joint 0 sits at the root position
         base, p0 = (1.0, 0.0, 0.0, 0.0), _components(root_pos, ops)
     else:
-        positions, orientations = fk.forward_kinematics(skeleton.parents, skeleton.offsets,
+        positions, orientations = fk.forward_kernel(skeleton.parents, skeleton.offsets,
                                                         local, root_pos)
         base = _components(orientations[..., skeleton.parents[req.root], :], ops)
         p0 = _components(positions[..., req.root, :], ops)
@@ -91,7 +91,7 @@ def solve_on_chain(req: Request, solver: Any, limits: list[tuple], weighted: boo
             return q, ops.stack(chain.forward(R, base, p0)[1] if P is None else P, B)
         out = local.copy()
         out[..., joints, :] = q
-        return out, fk.forward_kinematics(skeleton.parents, skeleton.offsets, out, root_pos)[0]
+        return out, fk.forward_kernel(skeleton.parents, skeleton.offsets, out, root_pos)[0]
 
     local_out, positions = pose(R, P)
     recorded = [pose(f) for f in frames] if req.record else None

@@ -12,6 +12,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from course.rotations._kernels import NumpyOps
+
 # A component: a Python float (FLOATS) or an ndarray (B,) (ARRAYS); a flag: a bool or a bool
 # ndarray (B,). Each implementation takes only its own kind, so the protocol leaves them open.
 Component = Any
@@ -119,24 +121,15 @@ class _Floats:
         return part
 
 
-class _Arrays:
-    """Component operations for a batch: every component an ndarray (B,)."""
-
-    sqrt, sin, cos, atan2, abs = (staticmethod(f) for f in (np.sqrt, np.sin, np.cos, np.arctan2,
-                                                            np.abs))
-    where, maximum, minimum = (staticmethod(f) for f in (np.where, np.maximum, np.minimum))
+class _Arrays(NumpyOps):
+    """Component operations for a batch: every component an ndarray (B,) (the rotation
+    kernels' :class:`~course.rotations._kernels.NumpyOps`, and what the chain code adds)."""
 
     @staticmethod
     def dist(a: tuple, b: tuple) -> np.ndarray:
         """Distance between two points (components (B,) or floats)."""
         x, y, z = a[0] - b[0], a[1] - b[1], a[2] - b[2]
         return np.sqrt(x * x + y * y + z * z)
-
-    @staticmethod
-    def select(c: np.ndarray, a: Any, b: Any) -> Any:
-        if isinstance(a, tuple | list):
-            return type(a)(_Arrays.select(c, x, y) for x, y in zip(a, b, strict=True))
-        return np.where(c, a, b)
 
     @staticmethod
     def full(like: np.ndarray, value: Any) -> np.ndarray:
@@ -162,16 +155,6 @@ class _Arrays:
         """Tuples of ``c`` components (B,) or floats as an array (B, len(items), c)."""
         return np.stack([np.stack([np.broadcast_to(c, (batch,)) for c in x], -1)
                          for x in items], 1)
-
-    both, invert = staticmethod(np.logical_and), staticmethod(np.logical_not)
-
-    @staticmethod
-    def any(a: np.ndarray) -> bool:
-        return bool(a.any())
-
-    @staticmethod
-    def all(a: np.ndarray) -> bool:
-        return bool(np.all(a))
 
     @staticmethod
     def take(x: Any, idx: np.ndarray) -> Any:

@@ -29,8 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from course._typing import Array
-
-from .small import TINY, cross, dot, norm
+from course.rotations._kernels import TINY, cross, dot, norm
 
 # Targets at least this share of the (in-plane) reach from the fixed joint start bent to
 # their distance; below it the given pose is kept, so an ordinary solve stays as it was. The

@@ -37,11 +37,7 @@ from numpy.typing import NDArray
 from course._typing import Array
 from course.fk import tree_path
 from course.rotations import matrix_from_quat, quat_from_matrix
-
-from .components import Limit, limit
-from .ops import ARRAYS
-from .reach import reach_points
-from .small import (
+from course.rotations._kernels import (
     TINY,
     best_rotation,
     cross,
@@ -52,6 +48,10 @@ from .small import (
     orthonormalize,
     rotvec_from_matrix,
 )
+
+from .components import Limit, limit
+from .ops import ARRAYS
+from .reach import reach_points
 
 
 @dataclass

@@ -23,14 +23,7 @@ from course import fk
 from course._typing import Array
 from course._validate import as_array
 from course.rotations import matrix_from_quat, quat_from_matrix
-
-from ..jacobian import dls_step, lost_rank, pinv_step, transpose_step
-from ..two_link import two_link
-from .chain_solvers import fabrik_points
-from .history import History
-from .ops import ARRAYS
-from .request import Request, Solved
-from .small import (
+from course.rotations._kernels import (
     TINY,
     best_rotation,
     cross,
@@ -41,6 +34,13 @@ from .small import (
     orthonormalize,
     rotvec_from_matrix,
 )
+
+from ..jacobian import dls_step, lost_rank, pinv_step, transpose_step
+from ..two_link import two_link
+from .chain_solvers import fabrik_points
+from .history import History
+from .ops import ARRAYS
+from .request import Request, Solved
 from .tree import Problem, TreeModel
 
 # DLS damping when none is given, as a share of the longest path to an effector.
@@ -546,7 +546,7 @@ def problem_of(req: Request) -> tuple[Problem, tuple[Array, Array, Array | None,
     if k == 0:  # the world frame is held and joint 0 sits at the root position
         base, p_k, Q_k = np.broadcast_to(np.eye(3), (B, 3, 3)), root_b, None
     else:
-        positions, orientations = fk.forward_kinematics(skeleton.parents, skeleton.offsets,
+        positions, orientations = fk.forward_kernel(skeleton.parents, skeleton.offsets,
                                                         local_b, root_b)
         p_k, Q_k = positions[:, k], orientations[:, k]
         base = matrix_from_quat(orientations[:, skeleton.parents[k]] if model.anchor_parent
@@ -584,11 +584,11 @@ def _pose(skeleton: Any, model: TreeModel, local: Array, root_pos: Array, Qk: Ar
             positions = np.empty_like(p)
             positions[:, model.joints] = p
         else:
-            positions, _ = fk.forward_kinematics(skeleton.parents, skeleton.offsets, local,
+            positions, _ = fk.forward_kernel(skeleton.parents, skeleton.offsets, local,
                                                  root_pos)
         return local, root_pos, positions
     k = int(model.joints[0])
-    positions, orientations = fk.forward_kinematics(
+    positions, orientations = fk.forward_kernel(
         skeleton.parents, skeleton.offsets, local, pk, root=k, root_orientation=Qk)
     local[:, 0] = orientations[:, 0]
     return local, positions[:, 0].copy(), positions
