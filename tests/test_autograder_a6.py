@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 from grading_fixtures import FIXTURES, LIMITS, fixture_submission, seed, visible_cases
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from autograder import check
 from autograder.assignments import load
@@ -174,3 +176,22 @@ def test_the_notebook_beside_a_right_solution_scores_full_marks(tmp_path):
     shutil.copy(FIXTURES / "a6" / "reference.py", tmp_path / "a6_physics.py")
     result = check("a6", tmp_path / "a6_physics.ipynb", limits=LIMITS)
     assert not result.problems and result.score == result.max_score == 7
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.floats(1.0, 300.0), st.floats(0.1, 30.0),
+       st.floats(0.5, 500.0))
+def test_pd_reference_against_scipys_rotation_vector(seed_, kp, kd, limit):
+    """τ = clip(k_p r - k_d ω) with r scipy's rotation vector of q⁻¹ q̄ (scalar last there),
+    the same for q̄ and -q̄, and never beyond the limit."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(seed_)
+    q, q_bar = (v / np.linalg.norm(v, axis=1, keepdims=True) for v in rng.normal(size=(2, 5, 4)))
+    omega = rng.normal(0, 2, (5, 3))
+    r = (Rotation.from_quat(np.roll(q, -1, axis=1)).inv()
+         * Rotation.from_quat(np.roll(q_bar, -1, axis=1))).as_rotvec()
+    tau = A6.function("pd_torque").reference(q, q_bar, omega, kp, kd, limit)
+    np.testing.assert_allclose(tau, np.clip(kp * r - kd * omega, -limit, limit), atol=1e-9)
+    np.testing.assert_allclose(pd_formula(q, -q_bar, omega, kp, kd, limit), tau, atol=1e-9)
+    assert np.all(np.abs(tau) <= limit)
