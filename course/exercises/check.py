@@ -36,7 +36,7 @@ _NOT_YET = "… {key}: not yet — write the body, then run this again"
 _PRINTED_CHARS = 4000  # of what the student's function prints, shown below the check
 
 #: The notebooks with exercises, by number (``nb02.py`` for ``"02"``).
-NOTEBOOKS = ("01", "02", "03", "04", "05", "06", "07", "08", "09", "10", "11", "12", "14")
+NOTEBOOKS = ("01", "02", "03", "04", "05", "06", "07", "08", "09", "10", "11", "12", "13", "14")
 
 
 @dataclass(frozen=True)
