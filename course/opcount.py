@@ -163,17 +163,29 @@ def solve3(A: Numbers, b: Numbers) -> np.ndarray:
     return np.array([_det3(M) * inverse for M in columns])
 
 
+def _value(x: Any) -> float:
+    """The float value of a counted number or a float (a test that costs no operation)."""
+    return x.value if isinstance(x, Counted) else float(x)
+
+
 def ccd_sweep(P: Numbers, t: Numbers) -> np.ndarray:
     """One CCD sweep, tip to root, on joint positions ``P (n + 1, 3)`` towards target ``t (3,)``.
 
     Each joint turns ``e - r_i`` onto ``t - r_i`` by the shortest arc (notebook 05). Written
     the economical way: during the sweep only the end effector is turned; the chain is rebuilt
-    once at the end. Returns the new joint positions ``(n + 1, 3)``.
+    once at the end. A joint with the effector or the target on its pivot has no direction to
+    turn to and stays (as in :func:`course.ik.ccd_positions`). Returns the new joint positions
+    ``(n + 1, 3)``.
     """
     e, turns = P[-1], list[np.ndarray]()
+    identity = np.array([1.0, 0.0, 0.0, 0.0])
     for i in range(len(P) - 2, -1, -1):
         u, v = e - P[i], t - P[i]
-        q = np.r_[norm(u) * norm(v) + dot(u, v), cross(u, v)]
+        nu, nv = norm(u), norm(v)
+        if min(_value(nu), _value(nv)) < 1e-12:
+            turns.insert(0, identity)
+            continue
+        q = np.r_[nu * nv + dot(u, v), cross(u, v)]
         q = q / np.sqrt(q[0] * q[0] + dot(q[1:], q[1:]))
         e = P[i] + qrot(q, u)
         turns.insert(0, q)
@@ -209,7 +221,9 @@ def jacobian_iteration(R: Numbers, offsets: Numbers, t: Numbers, method: str,
     Returns
     -------
     (n + 1, 4) the new local rotations,
-    :math:`R_i \leftarrow \exp(Q_{parent}^{-1}\Delta\theta_i)\,R_i`.
+    :math:`R_i \leftarrow \exp(Q_{parent}^{-1}\Delta\theta_i)\,R_i`; a joint whose step is
+    zero (the effector already on the target) keeps its rotation, and a transpose step whose
+    :math:`JJ^T\Delta e` vanishes is zero (:math:`\alpha = 0`, as :mod:`course.ik` takes it).
     """
     if method not in ("jacobian_transpose", "pseudo_inverse", "dls"):
         raise ValueError(f"method: expected 'jacobian_transpose', 'pseudo_inverse' or 'dls', "
@@ -225,7 +239,8 @@ def jacobian_iteration(R: Numbers, offsets: Numbers, t: Numbers, method: str,
     if method == "jacobian_transpose":
         g = J.T @ de
         Jg = J @ g
-        step = dot(de, Jg) / dot(Jg, Jg) * g
+        den = dot(Jg, Jg)
+        step = dot(de, Jg) / den * g if _value(den) > 0 else np.zeros(len(g))
     else:
         A = J @ J.T
         if method == "dls" and damping:
@@ -239,6 +254,9 @@ def jacobian_iteration(R: Numbers, offsets: Numbers, t: Numbers, method: str,
         if i > 0:
             turn = qrot(np.r_[Q[i - 1][0], -Q[i - 1][1:]], turn)
         angle = norm(turn)
+        if _value(angle) == 0:  # no step: exp(0) R_i = R_i (sin(angle/2)/angle would be 0/0)
+            new.append(np.asarray(R[i]))
+            continue
         new.append(qmul(np.r_[np.cos(angle / 2), np.sin(angle / 2) / angle * turn], R[i]))
     return np.array([*new, R[-1]])
 

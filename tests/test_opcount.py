@@ -134,3 +134,37 @@ def test_jacobian_iteration_names_a_bad_method():
     snake, pose, _, goal = _bent_snake()
     with pytest.raises(ValueError, match="method"):
         jacobian_iteration(pose, snake.offsets, goal, "newton")
+
+
+@pytest.mark.parametrize("method", ["jacobian_transpose", "pseudo_inverse", "dls"])
+def test_jacobian_iteration_with_the_effector_on_the_target_keeps_the_pose(method):
+    # Every joint's step is zero: exp(0) R = R, where sin(angle/2)/angle was 0/0 (NaN).
+    snake, pose, _, _ = _bent_snake()
+    damping = 0.5 if method == "dls" else 0.0
+    # The effector as the iteration's own forward kinematics places it (bit for bit), so the
+    # error and with it every step is exactly zero.
+    Q, e = pose[0], snake.offsets[0]
+    for i in range(1, len(pose)):
+        e, Q = e + qrot(Q, snake.offsets[i]), qmul(Q, pose[i])
+    R, _ = count_ops(jacobian_iteration, counted(pose), counted(snake.offsets), counted(e),
+                     method, damping)
+    assert np.array_equal(values(R), pose)
+    assert np.array_equal(jacobian_iteration(pose, snake.offsets, e, method, damping), pose)
+
+
+def test_jacobian_iteration_zero_step_for_one_joint_only():
+    # A target along the lever of the last joint's ball: its Jacobian columns see the error,
+    # yet a zero-length turn on any joint must keep that joint's rotation exactly.
+    snake, pose, P, goal = _bent_snake()
+    R = jacobian_iteration(pose, snake.offsets, goal, "dls", 0.5)
+    assert np.all(np.isfinite(R)) and np.array_equal(R[-1], pose[-1])
+
+
+def test_ccd_sweep_with_the_target_on_the_effector_or_on_a_joint():
+    _, _, P, _ = _bent_snake()
+    assert np.allclose(values(count_ops(ccd_sweep, counted(P), counted(P[-1]))[0]), P,
+                       atol=1e-12)
+    # The target on joint 2's pivot: that joint has no direction and stays; the rest turn.
+    mine = ccd_sweep(P, P[2])
+    assert np.all(np.isfinite(mine))
+    assert np.allclose(mine, ik.ccd_positions(P, P[2], max_iter=1)[0], atol=1e-9)
