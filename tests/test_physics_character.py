@@ -162,6 +162,21 @@ def test_stable_pd_is_stable_where_plain_pd_is_not(walk, walker) -> None:
     assert not spd.unstable and spd.error_cm.mean() < 1.0  # measured 0.26 cm
 
 
+def test_stable_pd_ceiling_is_the_first_order_position_term(walk, walker) -> None:
+    """One joint with implicit damping b = h kd / I and the position predicted at q + h q̇ is
+    stable iff a = kp h² / I < (4 + 2b) / 3 (docs/physics.md): with kd = kp h that is a < 4,
+    the same ceiling as undamped plain PD; with kd = 10 kp h there is none. Measured: the
+    first stops at a = 4.02 (I = I_min), the second is stable up to kp = 1e8."""
+    i_min = float(effective_inertia(walker, walk).min())
+    kp = 8.0 * i_min / H**2  # a = 8: twice the ceiling of kd = kp h
+    low = track(walker, walk, kp=kp, kd=kp * H, hold_root=True, n_frames=61, h=H,
+                stable_pd=True)
+    high = track(walker, walk, kp=kp, kd=10 * kp * H, hold_root=True, n_frames=61, h=H,
+                 stable_pd=True)
+    assert low.unstable or low.error_cm.max() > 50.0
+    assert not high.unstable and high.error_cm.max() < 5.0
+
+
 def test_zero_torque_limit_is_the_passive_ragdoll(walk, walker) -> None:
     clipped = track(walker, walk, kp=1000.0, kd=6.0, torque_limit=0.0, n_frames=31, h=H)
     passive = track(walker, walk, kp=0.0, kd=0.0, torques=False, n_frames=31, h=H)
