@@ -185,8 +185,9 @@ def test_push_checks_its_input(sample) -> None:
 
 
 def test_push_moves_the_com_by_its_impulse_in_free_fall(sample) -> None:
-    """Without gravity or torques and before any contact change, the COM velocity change is
-    the impulse over the mass (the floor pushes only vertically... so check horizontally)."""
+    """A 35 N push for 0.05 s on the passive character, sideways: over the push the COM's mean
+    horizontal velocity is half the impulse over the mass (constant force); friction with the
+    floor (the feet do not slide yet) takes the 10% allowed."""
     ch = sample
     pose = standing_pose(ch)
     push = Push("Hips", (35.0, 0.0, 0.0), 0.0, 0.05)
