@@ -11,9 +11,8 @@ branch of a redundant arm); every joint off the paths keeps the clip's own rotat
 
 from __future__ import annotations
 
-import copy
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -23,7 +22,8 @@ from course._typing import Array
 from course.motion import Motion
 from course.rotations import quat_conjugate, quat_mul, quat_rotate
 
-from .api import _run, _split_target, _validate
+from ._engine.request import Request
+from ._pipeline import run, split_target, validate
 from .result import Target
 
 
@@ -109,7 +109,7 @@ def solve_motion(
     F = motion.n_frames
     targets = _per_frame(targets_per_frame, F)
     # Every frame checked at once, as one batch: shapes, values, joints, limits, hinges.
-    req = _validate(motion.skeleton, motion.local_rotations, motion.root_positions, targets,
+    req = validate(motion.skeleton, motion.local_rotations, motion.root_positions, targets,
                     method, root, tol, max_iter, weights, limits, False, options)
     model = req.model
     moved_root = not model.anchor_parent  # joint 0 moves around a fixed joint elsewhere
@@ -127,12 +127,12 @@ def solve_motion(
             start[joints] = local[t - 1, joints]
             if moved_root:
                 start_root = root_pos[t - 1]
-        row = _frame(req, t, start, start_root)
         # A warm frame goes on from the last answer: the reach-aware start would jump to its
         # own bend wherever the target crosses 0.9 of the reach (measured: turns of 0.8-1.8
         # rad in one frame of a 4-bone arm), and from the last answer DLS needs no help.
-        row.reach_start = req.reach_start and not (warm_start and t)
-        r = _run(row, "auto")
+        row = _frame(req, t, start, start_root,
+                     reach_start=req.reach_start and not (warm_start and t))
+        r = run(row, "auto")
         local[t, joints] = r.local_rotations[joints]
         if moved_root:
             root_pos[t] = r.root_position
@@ -170,7 +170,7 @@ def _per_frame(targets: Any, F: int) -> dict[Any, Any]:
         raise ValueError("targets_per_frame: expected a non-empty mapping joint -> targets")
     out = {}
     for key, value in targets.items():
-        position, orientation = _split_target(value)
+        position, orientation = split_target(value)
         for what, a, ndim in (("position", position, 2), ("orientation", orientation, 2)):
             shape = np.shape(a) if a is not None else ()
             if len(shape) == ndim and shape[0] != F:
@@ -193,10 +193,9 @@ def _planted(motion: Motion, k: int, local: Array) -> tuple[Array, Array]:
     return local, root
 
 
-def _frame(req: Any, t: int, local: Array, root_pos: Array) -> Any:
+def _frame(req: Request, t: int, local: Array, root_pos: Array, reach_start: bool) -> Request:
     """Frame ``t`` of a batched request over the clip, started from ``local``, ``root_pos``."""
-    row = copy.copy(req)
-    row.local, row.root_pos, row.batched, row.B = local, root_pos, False, 1
-    row.pos_t = {j: a[t] if a.ndim == 2 else a for j, a in req.pos_t.items()}
-    row.rot_t = {j: a[t] if a.ndim == 2 else a for j, a in req.rot_t.items()}
-    return row
+    return replace(req, local=local, root_pos=root_pos, batched=False, B=1,
+                   pos_t={j: a[t] if a.ndim == 2 else a for j, a in req.pos_t.items()},
+                   rot_t={j: a[t] if a.ndim == 2 else a for j, a in req.rot_t.items()},
+                   reach_start=reach_start)

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import copy
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, NamedTuple
 
 from course._typing import Array
@@ -15,9 +14,11 @@ from .history import History
 from .tree import TreeModel
 
 
-@dataclass
+@dataclass(frozen=True, kw_only=True)
 class Request:
-    """One solve (``batched`` False: arrays without a batch axis) or a batch of ``B``.
+    """One solve (``batched`` False: arrays without a batch axis) or a batch of ``B``; frozen,
+    built by keyword (:func:`course.ik._pipeline.validate`) and varied with
+    :func:`dataclasses.replace`.
 
     ``pos_t`` and ``rot_t`` map effector joints to their position ``([B,] 3)`` and orientation
     ``([B,] 4)`` targets; ``limits`` holds each variable's :class:`~.components.Limit` (None:
@@ -52,12 +53,9 @@ class Request:
     def rows(self) -> Iterator[Request]:
         """The batch's problems, one by one (each without a batch axis)."""
         for i in range(self.B):
-            row = copy.copy(self)  # (dataclasses.replace re-runs every field: 5x slower)
-            row.local = _row(self.local, i, 3)
-            row.root_pos = _row(self.root_pos, i, 2)
-            row.pos_t = {j: _row(t, i, 2) for j, t in self.pos_t.items()}
-            row.rot_t, row.batched, row.B = {}, False, 1
-            yield row
+            yield replace(self, local=_row(self.local, i, 3), root_pos=_row(self.root_pos, i, 2),
+                          pos_t={j: _row(t, i, 2) for j, t in self.pos_t.items()}, rot_t={},
+                          batched=False, B=1)
 
 
 def _row(a: Array, i: int, batched_ndim: int) -> Array:
