@@ -9,7 +9,7 @@ checked functions. Two layouts share the formulas:
 * **components** (``v_*``, ``q_*``): a vector is a tuple ``(x, y, z)``, a quaternion
   ``(w, x, y, z)``, each component a Python float (one problem) or an ndarray ``(B,)`` (a
   batch, contiguous rows); ``ops`` (:class:`ScalarOps`) supplies what differs between the two.
-  The serial-chain IK engine runs on them, and :mod:`course.opcount` counts them.
+  The serial-chain IK engine runs on them.
 * **arrays** (``quat_*``, ``matrix_*``, ...): ``(..., 4)`` quaternions, ``(..., 3)`` vectors and
   ``(..., 3, 3)`` matrices broadcast over leading axes; :func:`quat_mul`, :func:`quat_rotate`
   and :func:`quat_between` are the component kernels applied to the arrays' columns, so the
@@ -31,14 +31,14 @@ from course._typing import Array
 # Below this length a direction is treated as undefined (zero bone, target on the pivot).
 TINY = 1e-12
 
-Scalar = Any  # a float, an ndarray (B,), or a counted number (course.opcount)
+Scalar = Any  # a float or an ndarray (B,)
 Vec = tuple[Any, Any, Any]  # (x, y, z) of Scalars
 Quat = tuple[Any, Any, Any, Any]  # (w, x, y, z) of Scalars
 
 
 class ScalarOps(Protocol):
     """What the component kernels ask of their ``ops``: the operations that differ between
-    Python floats, ndarrays ``(B,)`` and counted numbers."""
+    Python floats and ndarrays ``(B,)``."""
 
     def sqrt(self, x: Scalar, /) -> Scalar: ...
     def sin(self, x: Scalar, /) -> Scalar: ...

@@ -2,8 +2,8 @@ r"""The IK step kernels on *components* (a vector ``(x, y, z)``, a quaternion ``
 each component a Python float or an ndarray ``(B,)``; :mod:`course.rotations._kernels`):
 the joint-limit projection :func:`limit` and the turn of one joint, :func:`aim` (CCD's step
 at every joint, FABRIK's backward pass at every bone) and :func:`hinge_turn`. The serial-chain
-engine (:mod:`.chain`, :mod:`.chain_solvers`) and :mod:`course.opcount` run them as written;
-the tree engine uses :func:`limit`. The rotation arithmetic is the one copy in
+engine (:mod:`.chain`, :mod:`.chain_solvers`) runs them as written; the tree engine uses
+:func:`limit`. The rotation arithmetic is the one copy in
 :mod:`course.rotations._kernels`, re-exported here under the names the chain code uses.
 """
 
