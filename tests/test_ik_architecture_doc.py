@@ -35,8 +35,8 @@ def _resolve(dotted: str) -> object:
 
 DOTTED = sorted(set(re.findall(r"`(course(?:\.\w+)+)", DOC)))
 TREE_FILES = re.findall(r"[├└]── (\S+\.py|\S+/)", IK_SECTION)
-SHORT = sorted(set(re.findall(r"`((?:%s)\.(?!py`)\w+)" % "|".join(map(re.escape, IK_MODULES)),
-                              IK_SECTION)))
+_NAMES = "|".join(map(re.escape, IK_MODULES))
+SHORT = sorted(set(re.findall(rf"`((?:{_NAMES})\.(?!py`)\w+)", IK_SECTION)))
 
 
 def test_the_doc_names_something():
