@@ -22,9 +22,9 @@ def pd_torque(q: np.ndarray, q_bar: np.ndarray, omega: np.ndarray, kp: float,
     return np.asarray(kp * error - kd * np.asarray(omega, dtype=float), dtype=float)
 
 
-def kp_max(I: float, h: float, kd: float) -> float:  # noqa: E741 - the lecture's I
+def kp_max(inertia: float, h: float, kd: float) -> float:
     r"""Reference of 14.kp_max: the largest stable :math:`k_p` of explicit PD on a joint of
-    inertia :math:`I` stepped by semi-implicit Euler with step :math:`h`.
+    inertia :math:`I` (``inertia``) stepped by semi-implicit Euler with step :math:`h`.
 
     With :math:`a = h k_d / I`, :math:`b = h^2 k_p / I`, one step of the error
     :math:`(\dot x, x)` is :math:`\dot x^+ = (1-a)\dot x - (b/h) x`, :math:`x^+ = x + h\dot x^+`,
@@ -32,7 +32,7 @@ def kp_max(I: float, h: float, kd: float) -> float:  # noqa: E741 - the lecture'
     are inside the unit circle while :math:`b > 0`, :math:`0 < a < 2` and
     :math:`p(-1) = 4 - 2a - b > 0`, so :math:`k_p < (4I - 2hk_d)/h^2` (:math:`k_d = 0`:
     :math:`\omega h < 2`, notebook 12's bound)."""
-    return float((4.0 * I - 2.0 * h * kd) / h**2)
+    return float((4.0 * inertia - 2.0 * h * kd) / h**2)
 
 
 def leg_torque(theta: np.ndarray, lengths: np.ndarray, c_bar: np.ndarray,
@@ -96,10 +96,10 @@ def _kp_cases(rng: np.random.Generator) -> list[Case]:
     cases = [Case("a hand: I = 0.01 kg m², h = 1/600 s, no damping", (0.01, 1 / 600, 0.0)),
              Case("a thigh: I = 0.5 kg m², h = 1/120 s, kd = 10", (0.5, 1 / 120, 10.0))]
     for k in (1, 2):
-        I = float(np.round(rng.uniform(0.01, 2.0), 3))  # noqa: E741
+        inertia = float(np.round(rng.uniform(0.01, 2.0), 3))
         h = float(rng.choice([1 / 1000, 1 / 600, 1 / 240, 1 / 60]))
-        kd = float(np.round(rng.uniform(0.0, 1.5 * I / h), 1))
-        cases.append(Case(f"a random joint ({k})", (I, h, kd)))
+        kd = float(np.round(rng.uniform(0.0, 1.5 * inertia / h), 1))
+        cases.append(Case(f"a random joint ({k})", (inertia, h, kd)))
     return cases
 
 
@@ -153,7 +153,7 @@ EXERCISES = (
     ),
     Exercise(
         "kp_max",
-        Function("kp_max", ("I", "h", "kd"), kp_max, Check((), rtol=1e-9, noun="gain")),
+        Function("kp_max", ("inertia", "h", "kd"), kp_max, Check((), rtol=1e-9, noun="gain")),
         _kp_cases,
         hint="Write one step of ẋ⁺ = ẋ + h(−kp x − kd ẋ)/I, x⁺ = x + h ẋ⁺ as a 2 x 2 matrix; "
              "its eigenvalues must stay inside the unit circle. Which of λ = 1 and λ = −1 does "
