@@ -171,7 +171,7 @@ def _bones(P: Array) -> tuple[Array, Array]:
 
 def _put(full: Array, run: NDArray[np.intp], part: Array) -> Array:
     """A copy of ``full`` (3, B) with its columns ``run`` replaced by ``part``."""
-    out = full.copy()
+    out: Array = full.copy()
     out[:, run] = part
     return out
 
@@ -179,4 +179,5 @@ def _put(full: Array, run: NDArray[np.intp], part: Array) -> Array:
 def _length(v: Array) -> Array:
     r"""Euclidean length :math:`\sqrt{x^2 + y^2 + z^2}` of vectors ``v`` (3, ...)."""
     x, y, z = v
-    return np.sqrt(x * x + y * y + z * z)
+    out: Array = np.sqrt(x * x + y * y + z * z)
+    return out

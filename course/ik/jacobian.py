@@ -108,7 +108,8 @@ def pinv_tall(J: ArrayLike) -> Array:
     J = np.asarray(J, float)
     _, inv2, Vt = _inverse_square_singular(J)
     V = np.swapaxes(Vt, -1, -2)
-    return ((V * inv2[..., None, :]) @ Vt) @ np.swapaxes(J, -1, -2)
+    out: Array = ((V * inv2[..., None, :]) @ Vt) @ np.swapaxes(J, -1, -2)
+    return out
 
 
 def pinv_svd(J: ArrayLike, rcond: float = 1e-6) -> Array:
@@ -117,7 +118,8 @@ def pinv_svd(J: ArrayLike, rcond: float = 1e-6) -> Array:
     U, s, Vt = np.linalg.svd(np.asarray(J, float), full_matrices=False)
     cut = s > rcond * s[..., :1]
     inv = np.where(cut, 1.0 / np.where(cut, s, 1.0), 0.0)
-    return np.swapaxes(Vt, -1, -2) @ (inv[..., :, None] * np.swapaxes(U, -1, -2))
+    out: Array = np.swapaxes(Vt, -1, -2) @ (inv[..., :, None] * np.swapaxes(U, -1, -2))
+    return out
 
 
 def transpose_step(J: ArrayLike, e: ArrayLike) -> Array:
@@ -129,14 +131,16 @@ def transpose_step(J: ArrayLike, e: ArrayLike) -> Array:
     Jg = (J @ g[..., None])[..., 0]
     den = np.einsum("...i,...i->...", Jg, Jg)
     alpha = np.einsum("...i,...i->...", e, Jg) / np.where(den > 0, den, 1.0)
-    return alpha[..., None] * g
+    out: Array = alpha[..., None] * g
+    return out
 
 
 def pinv_step(J: ArrayLike, e: ArrayLike, rcond: float = 1e-6) -> Array:
     r"""Least-squares increment :math:`J^+ e` (:func:`pinv_svd`).
 
     ``J`` (..., m, n), ``e`` (..., m) -> (..., n)."""
-    return (pinv_svd(J, rcond) @ np.asarray(e, float)[..., None])[..., 0]
+    out: Array = (pinv_svd(J, rcond) @ np.asarray(e, float)[..., None])[..., 0]
+    return out
 
 
 def dls_step(

@@ -87,7 +87,7 @@ class Method:
 
 
 def _positive_angle(x: Any) -> bool:
-    return x > 0
+    return bool(x > 0)
 
 
 _ANGLE = "a positive angle in radians (inf: no cap)"

@@ -120,7 +120,8 @@ def solve_motion(
         starts, start_roots = _planted(motion, req.root, starts)
     local = motion.local_rotations.copy()
     root_pos = motion.root_positions.copy()
-    out = {k: [] for k in ("residuals", "iterations", "converged", "reasons")}
+    out: dict[str, list[Any]] = {k: [] for k in ("residuals", "iterations", "converged",
+                                                 "reasons")}
     for t in range(F):
         start, start_root = starts[t].copy(), start_roots[t]
         if warm_start and t:
@@ -172,7 +173,7 @@ def _per_frame(targets: Any, F: int) -> dict[Any, Any]:
     for key, value in targets.items():
         position, orientation = split_target(value)
         for what, a, ndim in (("position", position, 2), ("orientation", orientation, 2)):
-            shape = np.shape(a) if a is not None else ()
+            shape: tuple[int, ...] = np.shape(a) if a is not None else ()
             if len(shape) == ndim and shape[0] != F:
                 raise ValueError(f"targets_per_frame[{key!r}] {what}: {shape[0]} frames, the "
                                  f"motion has {F}")

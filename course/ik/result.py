@@ -113,4 +113,5 @@ class IKResult:
     @property
     def error(self) -> float | Array:
         """The final residual (largest effector error)."""
-        return self.residuals[-1]
+        last: float | Array = self.residuals[-1]
+        return last

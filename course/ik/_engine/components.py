@@ -62,10 +62,11 @@ def limit(R: Quat, lim: Limit, ops: Ops) -> Quat:
     :func:`clamp_swing_twist`."""
     if lim.kind == "cap":
         return cap_angle(R, lim.hi, ops)
-    if lim.kind == "swing_twist":
-        return clamp_swing_twist(R, lim.axis, lim.cone, lim.lo, lim.hi, ops)
-    w, x, y, z = R
     axis = lim.axis
+    assert axis is not None, "a hinge or swing-twist limit has an axis"
+    if lim.kind == "swing_twist":
+        return clamp_swing_twist(R, axis, lim.cone, lim.lo, lim.hi, ops)
+    w, x, y, z = R
     theta = ops.atan2(2.0 * w * dot((x, y, z), axis), w * w - (x * x + y * y + z * z))
     fix = ops.minimum(ops.maximum(theta, lim.lo), lim.hi) - theta
     return quat_mul(quat_from_axis_angle(axis, fix, ops), R)

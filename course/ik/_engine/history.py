@@ -30,7 +30,7 @@ class History:
         stop at once, stalled."""
         self.tol, self.max_iter, self.ops = tol, max_iter, ops
         self.residuals = [ops.copy(err)]
-        self._progress: list = [] if progress is None else [ops.copy(progress)]
+        self._progress: list[Any] = [] if progress is None else [ops.copy(progress)]
         self.iterations = ops.full(err, 0)
         self.stalled = ops.both(ops.full(err, True), ops.both(done, err >= tol))
         self.active = (ops.both(err >= tol, ops.invert(self.stalled)) if max_iter > 0

@@ -63,7 +63,8 @@ def _row(a: Array, i: int, batched_ndim: int) -> Array:
     over the batch), else ``a`` itself."""
     if a.ndim < batched_ndim:
         return a
-    return a[i if len(a) > 1 else 0]
+    row: Array = a[i if len(a) > 1 else 0]
+    return row
 
 
 class Solved(NamedTuple):
