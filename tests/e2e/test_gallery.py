@@ -67,6 +67,7 @@ REQUIRED = {
     "notebooks/04_two_link_ik.ipynb": ("min (pole angle", "max (pole angle"),
     "assignments/a2_forward_kinematics.ipynb": ("min (frame", "max (frame"),
     "notebooks/11_keyframes.ipynb": ("min (keys n", "min (p0"),
+    "notebooks/13_rigid_bodies.ipynb": ("min (time step h", "max (time step h"),
 }
 SIZES = ((1366, 768), (1920, 1080))
 PARALLEL = int(os.environ.get("GALLERY_PARALLEL", "3"))
