@@ -605,8 +605,9 @@ class Sandbox:
              sizes: list[int] | None = None) -> list[Outcome]:
         """Evaluate ``fn`` on each argument tuple. ``sizes[i]``: the most numbers case ``i``
         may return (a larger answer is not decoded; see :func:`_bounded`). After a fatal
-        case a fresh child runs the rest; after ``limits.max_fatal`` fatal cases (or forged
-        frames) the rest are skipped, and so is everything once the budget is spent."""
+        case a fresh child runs the rest, and is stopped when they are done; after
+        ``limits.max_fatal`` fatal cases (or forged frames) the rest are skipped, and so is
+        everything once the budget is spent."""
         sizes = sizes if sizes is not None else [MAX_NUMBERS] * len(cases)
         outcomes: list[Outcome] = []
         while len(outcomes) < len(cases):
@@ -622,6 +623,10 @@ class Sandbox:
             fatal = sum(o.status in FATAL for o in outcomes)
             if outcomes[-1].status == "garbage" or fatal >= self.limits.max_fatal:
                 break
+        if any(o.status in FATAL for o in outcomes):
+            # the fresh child that ran the rest has spent this test's CPU time and memory:
+            # the next test gets its own, so it is never charged for this one
+            self.stop()
         left = len(cases) - len(outcomes)
         if left and time.monotonic() >= self.deadline:
             return outcomes + [Outcome("skipped", message=self._budget_message())] * left
