@@ -55,12 +55,14 @@ def processes_of(uid: int) -> list[int]:
 
 
 @pytest.mark.parametrize("level", KERNEL_LEVELS)
-def test_with_the_hook_defeated_the_kernel_gives_nothing(tmp_path, level):
+def test_with_the_hook_defeated_the_kernel_gives_nothing(tmp_path, level, monkeypatch):
     """The escapes of the security review, run as plain Python with no audit hook while a
     classmate's submission runs beside it: no host file, no chroot escape, no process, no
     signal or pidfd to the grader or the classmate, no other folder, no writable place but
     its own, the disk and memory limits hold, no native module, and nothing left running."""
     needs(level)
+    # user ids no other test leases: "nothing left running" must not see a classmate test's
+    monkeypatch.setenv(jail.UIDS_ENV, "61950-61999")
     secret = tmp_path / "grades.csv"
     secret.write_text("alice,24\n")
     targets = [str(REPO / "tests/fixtures/a1/reference.py"), "/etc/shadow", "/etc/passwd",
