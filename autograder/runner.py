@@ -19,7 +19,7 @@ import numpy as np
 
 from .results import CaseResult, Result, TestResult
 from .sandbox import DEFAULT_LIMITS, Limits, Outcome, Sandbox, level_for
-from .spec import Assignment, Case, Function, Misconception, Test, case_rng
+from .spec import Assignment, Case, Function, Misconception, Rollout, Test, case_rng
 from .submission import Source, SubmissionError, import_problems, read_regular, read_source
 
 ASSIGNMENTS_DIR = Path(__file__).resolve().parents[1] / "assignments"
@@ -27,7 +27,8 @@ ASSIGNMENTS_DIR = Path(__file__).resolve().parents[1] / "assignments"
 
 @dataclass(frozen=True)
 class Prepared:
-    """A test with its cases and the reference's answers, computed once per seed."""
+    """A test with its cases and the reference's answers (a rollout's: the list of its
+    answers, step by step), computed once per seed."""
 
     test: Test
     cases: tuple[Case, ...]
@@ -45,7 +46,9 @@ def prepare(assignment: Assignment, seed: str | None) -> tuple[Prepared, ...]:
         fn = assignment.function(test.function)
         cases = tuple(test.cases(case_rng(test, seed)))
         if cases:
-            out.append(Prepared(test, cases, tuple(fn.reference(*c.args) for c in cases)))
+            expected = (fn.reference(*c.args) if test.rollout is None
+                        else test.rollout.run(fn.reference, c.args) for c in cases)
+            out.append(Prepared(test, cases, tuple(expected)))
     return tuple(out)
 
 
@@ -88,7 +91,8 @@ def _skip_all(result: Result, note: str) -> None:
 def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared, ...],
                result: Result, limits: Limits) -> None:
     names = [f.name for f in assignment.functions]
-    total = sum(len(p.cases) for p in prepared)
+    total = sum(len(p.cases) * (p.test.rollout.steps if p.test.rollout else 1)
+                for p in prepared)
     with Sandbox(source.text, names, limits, assignment.allowed_imports, total,
                  level=result.isolation) as sandbox:
         started = sandbox.start()
@@ -104,13 +108,21 @@ def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared,
             if fn.name in sandbox.missing:
                 tr.note = f"{assignment.template} has no function {fn.name}()"
                 continue
+            catalogue = assignment.misconceptions_of(fn.name)
+            if p.test.rollout is not None:
+                rolled = [roll(fn, p.test.rollout, c, e, sandbox, source.locate, catalogue)
+                          for c, e in zip(p.cases, p.expected, strict=True)]
+                tr.cases = [r for r, _ in rolled]
+                # the diagnosis reads, in each failing run, the first step unlike the reference's
+                tr.misconception = diagnose(assignment, fn, [w for _, w in rolled if w])
+                tr.elapsed = time.monotonic() - started_at
+                continue
             outcomes = sandbox.call(fn.name, [c.args for c in p.cases],
                                     [4 * _numbers(e) + 64 for e in p.expected])
             if any(o.status == "garbage" for o in outcomes):
                 # Frames that are not the child's own void the test: none of it can be trusted.
                 forged = next(o for o in outcomes if o.status == "garbage")
                 outcomes = [forged] * len(outcomes)
-            catalogue = assignment.misconceptions_of(fn.name)
             tr.cases = [judge(fn, c, e, o, sandbox.memory_mb, source.locate, catalogue)
                         for c, e, o in zip(p.cases, p.expected, outcomes, strict=True)]
             tr.misconception = (_callee_mistake(assignment, fn, tr.cases, sandbox)
@@ -160,6 +172,44 @@ def judge(fn: Function, case: Case, expected: Any, out: Outcome, memory_mb: int 
     if out.status == "timeout" and fn.timeout_hint:
         message = f"{message}: {fn.timeout_hint}"
     return CaseResult(case, out.status, message, None, expected)
+
+
+def roll(fn: Function, rollout: Rollout, case: Case, expected: list[Any], sandbox: Sandbox,
+         locate: Callable[[int], str], catalogue: tuple[Misconception, ...]
+         ) -> tuple[CaseResult, CaseResult | None]:
+    """One rollout case: the student's function called ``rollout.steps`` times in the
+    sandbox, the state carried between calls here, and the run judged by
+    ``rollout.verdict``. Also returns, if the run fails, its first step whose answer is
+    unlike the reference's on the same arguments (as a case of its own, for the diagnosis).
+    A call that raises, stops or answers in the wrong shape ends the run there."""
+    steps: list[Case] = []
+    answers: list[Any] = []
+    size = 4 * _numbers(expected[0]) + 64
+    args = case.args
+    for k, want in enumerate(expected):
+        steps.append(Case(f"{case.label}, step {k + 1} of {rollout.steps}", args))
+        [out] = sandbox.call(fn.name, [args], [size])
+        if out.status == "ok":
+            assert out.value is not None
+            valid = fn.check.validate(fn.name, out.value, want)
+            if valid.error is None:
+                answers.append(valid.array)
+                args = rollout.advance(args, valid.array)
+                continue
+        ended = judge(fn, steps[-1], want, out, sandbox.memory_mb, locate, catalogue)
+        reason = ended.reason if ended.kind == "not_implemented" else (
+            f"step {k + 1} of {rollout.steps}: {ended.reason}")
+        return CaseResult(case, ended.kind, reason, None, expected[-1], ended.error), None
+    why = rollout.verdict(answers, expected, case.args)
+    if why is None:
+        return CaseResult(case, "pass", got=answers[-1], expected=expected[-1]), None
+    first_wrong = None
+    for step, got in zip(steps, answers, strict=True):
+        reference = fn.reference(*step.args)
+        if fn.check.judge(got, reference, step.args) is not None:
+            first_wrong = CaseResult(step, "wrong", got=got, expected=reference)
+            break
+    return CaseResult(case, "wrong", why, answers[-1], expected[-1]), first_wrong
 
 
 def _explained(m: Misconception, error: dict[str, Any], case: Case) -> str | None:

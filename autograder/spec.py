@@ -14,7 +14,9 @@ An assignment module (``autograder/assignments/a1.py``) builds one :class:`Assig
   inputs raise (an inverse of a singular matrix) may also *explain* those errors; a
   mistake *caused by* another function the template asks this one to call (:class:`Uses`)
   is found by calling the student's own callee on the failing cases' arguments;
-* optionally, per function, a :class:`Picture` of a failing case (skeletons, chains).
+* optionally, per function, a :class:`Picture` of a failing case (skeletons, chains);
+* for a function that steps a simulation, tests whose cases are whole runs
+  (:class:`Rollout`), judged by what the run achieves rather than call by call.
 
 Nothing here runs student code; the runner does, in a sandbox.
 """
@@ -86,11 +88,35 @@ class Function:
 
 
 @dataclass(frozen=True)
+class Rollout:
+    """Cases judged by what many calls in a row achieve: a simulation the student's function
+    steps. Each case's arguments start it; the grader, never the submission, carries the
+    state from one call to the next, ``advance(args, answer)`` giving the next call's
+    arguments; after ``steps`` calls ``verdict(answers, expected, start)`` compares the run
+    with the reference's (``expected``, the same rollout of the reference function) by what
+    they do (a rotation stays a rotation, a joint settles, a handle flips when it should):
+    None if it achieves what it should, else one sentence on what it did."""
+
+    steps: int
+    advance: Callable[[tuple[Any, ...], Any], tuple[Any, ...]]
+    verdict: Callable[[list[Any], list[Any], tuple[Any, ...]], str | None]
+
+    def run(self, step: Callable[..., Any], start: tuple[Any, ...]) -> list[Any]:
+        """The answers of ``step`` (the reference) over the whole rollout from ``start``."""
+        args, answers = start, []
+        for _ in range(self.steps):
+            answers.append(step(*args))
+            args = self.advance(args, answers[-1])
+        return answers
+
+
+@dataclass(frozen=True)
 class Test:
     """A named group of cases of one function, worth ``points``.
 
     ``hidden`` tests draw their cases from the secret seed and are shown to students only
     after grades are published. ``bonus`` points add to the score but not to the maximum.
+    A test with a ``rollout`` runs each case as a simulation (:class:`Rollout`).
     """
 
     name: str
@@ -99,6 +125,7 @@ class Test:
     cases: Callable[[np.random.Generator], Sequence[Case]]
     hidden: bool = False
     bonus: bool = False
+    rollout: Rollout | None = None
 
 
 #: a test's case generator: the cases drawn from a seeded generator

@@ -28,7 +28,7 @@ from course import rotations as rot
 from course.physics.rigid_body import RigidBody, RigidState, step_rigid, t_handle
 
 from ..checks import Check, QuatCheck, TupleCheck, show
-from ..spec import Assignment, Case, Function, Misconception, Test, random_edge_hidden
+from ..spec import Assignment, Case, Function, Misconception, Rollout, Test, random_edge_hidden
 
 # --- the rigid-body step -----------------------------------------------------------------------
 
@@ -134,6 +134,103 @@ def _explicit(got: Any, *args: Any) -> bool:
     x, v, *_, h = args
     return bool(np.allclose(got[0], x + h * v, atol=1e-9)
                 and not np.allclose(got[0], step_reference(*args)[0], atol=1e-6))
+
+
+# --- the rigid-body step, run for seconds ------------------------------------------------------
+
+STEP_RUN = 300  # steps of each simulated body (1.5 s at h = 0.005: a T-handle flips thrice)
+
+
+def _carry_body(args: StepArgs, answer: Any) -> StepArgs:
+    """The next step's arguments: the body's new state, the rest as it was."""
+    x, v, q, L = (np.asarray(a, dtype=float) for a in answer)
+    return (x, v, q, L, *args[4:])
+
+
+def _apart(q: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """The angles (rad) between the rotations of rows of ``q`` and ``r`` (q ~ -q)."""
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    r = r / np.linalg.norm(r, axis=-1, keepdims=True)
+    out: np.ndarray = 2 * np.arccos(np.clip(np.abs(np.sum(q * r, axis=-1)), 0.0, 1.0))
+    return out
+
+
+def _flips(q: np.ndarray, L: np.ndarray, inertia_body: np.ndarray, h: float
+           ) -> np.ndarray | None:
+    """The times a body spun about its intermediate principal axis turns over (its spin about
+    that axis, ω in the body frame, changes sign: the Dzhanibekov flip); None for a body not
+    spun so."""
+    inv = np.linalg.inv(inertia_body)
+    R = rot.matrix_from_quat(q / np.linalg.norm(q, axis=-1, keepdims=True))
+    omega = np.einsum("ij,tkj,tk->ti", inv, R, L)  # I₀⁻¹ Rᵀ L, step by step
+    spin = omega @ np.linalg.eigh(inertia_body)[1][:, 1]
+    if abs(spin[0]) < 0.5 * np.linalg.norm(omega[0]):
+        return None
+    flips: np.ndarray = h * (np.flatnonzero(np.sign(spin[1:]) != np.sign(spin[:-1])) + 2)
+    return flips
+
+
+def _times(t: np.ndarray) -> str:
+    return ", ".join(f"{x:.2f} s" for x in t[:3]) + (" ..." if len(t) > 3 else "")
+
+
+def run_verdict(answers: list[Any], expected: list[Any], start: StepArgs) -> str | None:
+    """What a simulated body did wrong, if anything: its quaternion left the unit sphere,
+    its angular momentum changed other than by the torque, it tumbled (flipped) unlike the
+    reference, or its orientation or centre of mass left the reference's."""
+    x, _, q, L = (np.array([a[i] for a in answers]) for i in range(4))
+    xr, _, qr, _ = (np.array([a[i] for a in expected]) for i in range(4))
+    h, torque = start[8], np.asarray(start[7])
+    t = h * np.arange(1, len(answers) + 1)
+    norm = np.linalg.norm(q, axis=1)
+    k = int(np.argmax(np.abs(norm - 1)))
+    if abs(norm[k] - 1) > 1e-6:
+        return (f"|q| is {norm[k]:.7g} at t = {t[k]:.2f} s (after {k + 1} steps): the "
+                "orientation is no longer a rotation")
+    L_exact = start[3] + t[:, None] * torque  # L changes by h τ a step, exactly
+    off = np.linalg.norm(L - L_exact, axis=1)
+    k = int(np.argmax(off))
+    if off[k] > 1e-9 * (1 + np.linalg.norm(L_exact[k])):
+        return (f"L is {show(L[k], 4)} at t = {t[k]:.2f} s, where L₀ + t τ = "
+                f"{show(L_exact[k], 4)}: angular momentum changes only by the torque")
+    apart = _apart(q, qr)
+    if apart.max() > 1e-3:
+        k = int(np.argmax(apart > 1e-3))
+        yours, theirs = _flips(q, L, start[5], h), _flips(qr, L_exact, start[5], h)
+        tumble = ""
+        if yours is not None and theirs is not None and (
+                len(yours) != len(theirs) or not np.allclose(yours, theirs, atol=0.05)):
+            tumble = (f"; it turns over at {_times(yours)}" if len(yours) else
+                      "; it never turns over") + f", the reference's at {_times(theirs)}"
+        return (f"its orientation leaves the reference's: {np.degrees(apart[k]):.3g}° apart "
+                f"at t = {t[k]:.2f} s, {np.degrees(apart[-1]):.3g}° at the end"
+                f"{tumble}")
+    gap = np.linalg.norm(x - xr, axis=1)
+    if gap.max() > 1e-6 * (1 + np.abs(xr).max()):
+        k = int(np.argmax(gap))
+        return (f"its centre of mass is {gap[k] * 1e3:.3g} mm from the reference's at "
+                f"t = {t[k]:.2f} s")
+    return None
+
+
+def step_runs(rng: np.random.Generator) -> list[Case]:
+    handle = t_handle()
+    q = _random_quat(rng)
+    R = rot.matrix_from_quat(q)
+    L_handle = R @ handle.inertia @ np.array([20.0, 0.1, 0.05])
+    box = np.diag([0.3, 0.5, 0.7])  # spun about its axis of most inertia: stable
+    mass = 1.5
+    thrown = (np.zeros(3), np.array([1.0, 4.0, 0.5]), q, R @ box @ np.array([0.2, 0.3, 6.0]),
+              mass, box, mass * np.array([0.0, -9.81, 0.0]), np.zeros(3), 0.005)
+    twisted = _step_args(rng, 0.005, diagonal=False)
+    return [
+        Case("a T-handle spun about its bar: it must flip over, as the reference's does",
+             (np.zeros(3), np.zeros(3), q, L_handle, handle.mass, handle.inertia, np.zeros(3),
+              np.zeros(3), 0.005)),
+        Case("a box thrown up, spinning about its axis of most inertia (gravity as the "
+             "force)", thrown),
+        Case("a body off its principal axes under a constant force and torque", twisted),
+    ]
 
 
 # --- the PD torque -----------------------------------------------------------------------------
@@ -274,6 +371,65 @@ def pd_drive(rng: np.random.Generator) -> list[Case]:
         Case("the same, the target stored as -q̄", drive_args(rng, 0.3, True)),
         Case("a target turned far from rest (about 2.5 rad)", drive_args(rng, 1.5, False)),
         Case("a target turned far from rest, stored as -q̄", drive_args(rng, 1.5, True)),
+    ]
+
+
+DRIVE_H = 1 / 300  # s: the step of the grader's simulated joints
+DRIVE_RUN = 270  # steps: 0.9 s (the reference is within 1° of its targets by 0.7 s)
+
+
+def _carry_joints(args: tuple[Any, ...], tau: np.ndarray) -> tuple[Any, ...]:
+    """Each joint one step on: JOINT_INERTIA turning under ``tau`` (Euler's equations in its
+    own frame, I ω̇ = τ - ω × I ω), semi-implicit, q⁺ = q ⊗ exp(h ω⁺)."""
+    q, q_bar, omega, *gains = args
+    inv = np.linalg.inv(JOINT_INERTIA)
+    omega = omega + DRIVE_H * (tau - np.cross(omega, omega @ JOINT_INERTIA)) @ inv
+    q = rot.quat_mul(q, rot.quat_from_rotvec(DRIVE_H * omega))
+    return (q / np.linalg.norm(q, axis=1, keepdims=True), q_bar, omega, *gains)
+
+
+def drive_run_verdict(answers: list[Any], expected: list[Any], start: tuple[Any, ...]
+                      ) -> str | None:
+    """What joints driven by these torques did wrong, if anything: a torque past its limit,
+    the long way round to a target, or still off target at the end."""
+    limit = start[5]
+    over = max(float(np.max(np.abs(a))) for a in answers)
+    if over > limit * (1 + 1e-9):
+        return f"a torque reached {over:.4g} N m, past the limit ±{limit:g} N m"
+    runs = [[start], [start]]
+    for run, torques in zip(runs, (answers, expected), strict=True):
+        for tau in torques:
+            run.append(_carry_joints(run[-1], np.asarray(tau)))
+    end = runs[0][-1]
+    away = _apart(start[0], start[1])
+    off, spin = _apart(end[0], end[1]), np.linalg.norm(end[2], axis=1)
+    j = int(np.argmax(off + spin))
+    if off[j] > 0.01 or spin[j] > 0.1:
+        return (f"after {DRIVE_H * len(answers):.2g} s joint {j} is {off[j]:.3g} rad from its "
+                f"target, turning at {spin[j]:.3g} rad/s (it started {away[j]:.2f} rad away; "
+                "the reference's joints have settled)")
+    travel = [DRIVE_H * sum(np.linalg.norm(s[2], axis=1) for s in r[1:]) for r in runs]
+    j = int(np.argmax(travel[0] - travel[1]))
+    if travel[0][j] > travel[1][j] + 0.5:
+        return (f"joint {j} turned through {travel[0][j]:.2f} rad on its way to a target "
+                f"{away[j]:.2f} rad away (the reference's: {travel[1][j]:.2f} rad): it went "
+                "the long way round, or wandered")
+    return None
+
+
+def pd_runs(rng: np.random.Generator) -> list[Case]:
+    def far(stored_negated: bool) -> tuple[Any, ...]:
+        q = np.array([_random_quat(rng) for _ in range(3)])
+        axes = rng.normal(size=(3, 3))
+        axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+        turn = rot.quat_from_rotvec(axes * np.array([[2.0], [2.5], [2.8]]))
+        q_bar = rot.quat_mul(q, turn) * (-1.0 if stored_negated else 1.0)
+        kp = float(rng.uniform(100, 200))
+        return q, q_bar, np.zeros((3, 3)), kp, 2 * np.sqrt(kp * 0.2), 15.0
+    return [
+        Case("three joints driven 2-2.8 rad to their targets, torques at their limit",
+             far(False)),
+        Case("the same, the targets stored as -q̄", far(True)),
     ]
 
 
@@ -535,8 +691,12 @@ ASSIGNMENT = Assignment(
     functions=_FUNCTIONS,
     tests=(
         *random_edge_hidden("rigid_body_step", step_random, step_edges, step_hidden),
+        Test("rigid_body_step: bodies simulated for 1.5 s", "rigid_body_step", 1.0,
+             step_runs, rollout=Rollout(STEP_RUN, _carry_body, run_verdict)),
         *random_edge_hidden("pd_torque", pd_random, pd_edges, pd_hidden),
         Test("pd_torque: a joint driven to its target", "pd_torque", 1.0, pd_drive),
+        Test("pd_torque: joints driven from far for 0.9 s", "pd_torque", 1.0, pd_runs,
+             rollout=Rollout(DRIVE_RUN, _carry_joints, drive_run_verdict)),
         *random_edge_hidden("balance_torque", balance_random, balance_edges, balance_hidden),
     ),
     misconceptions=MISCONCEPTIONS,
