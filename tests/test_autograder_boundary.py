@@ -108,9 +108,11 @@ def test_with_the_hook_defeated_the_kernel_gives_nothing(tmp_path, level, monkey
         for attempt in ("signal_grader", "signal_classmate", "signal_everyone"):
             assert reached[attempt] == "refused: Operation not permitted", attempt
         # no tmpfs without mounts: the disk watch stopped it, within milliseconds of its
-        # limit (writing at memory speed, that is some MiB past it; docs/sandbox.md)
+        # limit (writing at memory speed, that is some MiB past it; docs/sandbox.md). It
+        # reports each 1 MiB file after writing it: stopped at once, the last report is one
+        # file short of the limit.
         assert "disk_full" not in reached and proc.returncode == -signal.SIGKILL
-        assert limits.disk_mb <= reached["disk_written_mb"] <= limits.disk_mb + OVERSHOOT_MB
+        assert limits.disk_mb - 1 <= reached["disk_written_mb"] <= limits.disk_mb + OVERSHOOT_MB
         assert processes_of(leased) == []
         assert not mate.work.exists() and not box.work.exists()
 
