@@ -24,14 +24,28 @@ Array = NDArray[np.float64]
 
 def show(x: Array, digits: int = 3) -> str:
     """An array on one short line, ``digits`` decimals, trailing zeros dropped:
-    ``[0.5, -1, 0]``."""
+    ``[0.5, -1, 0]``. An array whose every entry would print as 0 (a T-handle's inertia,
+    2.4e-4 kg m²) gets the decimals that keep ``digits`` significant ones of its largest."""
     a = np.asarray(x, dtype=float)
-    if a.ndim == 0:
-        v = f"{a:.{digits}f}".rstrip("0").rstrip(".") if np.isfinite(a) else str(a)
-        return "0" if v == "-0" else v
     if a.size > 24:
         return f"<array of shape {a.shape}>"
-    return "[" + ", ".join(show(v, digits) for v in a) + "]"
+    finite = np.abs(a[np.isfinite(a)])
+    largest = float(finite.max()) if finite.size else 0.0
+    style = "f"
+    if 0 < largest < 0.5 * 10.0**-digits:
+        style, digits = ("f", digits - 1 - int(np.floor(np.log10(largest)))) if (
+            largest >= 1e-5) else ("g", digits)
+    return _show(a, digits, style)
+
+
+def _show(a: np.ndarray, digits: int, style: str) -> str:
+    if a.ndim == 0:
+        if not np.isfinite(a):
+            return str(a)
+        v = f"{a:.{digits}{style}}"
+        v = v.rstrip("0").rstrip(".") if style == "f" else v
+        return "0" if v in ("-0", "-0.0") else v
+    return "[" + ", ".join(_show(v, digits, style) for v in a) + "]"
 
 
 @dataclass(frozen=True)
