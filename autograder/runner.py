@@ -181,25 +181,29 @@ def roll(fn: Function, rollout: Rollout, case: Case, expected: list[Any], sandbo
     sandbox, the state carried between calls here, and the run judged by
     ``rollout.verdict``. Also returns, if the run fails, its first step whose answer is
     unlike the reference's on the same arguments (as a case of its own, for the diagnosis).
-    A call that raises, stops or answers in the wrong shape ends the run there."""
+    A call that raises, stops or answers in the wrong shape ends the run there (a raised
+    error is then the step the diagnosis reads)."""
     steps: list[Case] = []
     answers: list[Any] = []
     size = 4 * _numbers(expected[0]) + 64
-    args = case.args
+    state = rollout.start(case.args)
     for k, want in enumerate(expected):
-        steps.append(Case(f"{case.label}, step {k + 1} of {rollout.steps}", args))
-        [out] = sandbox.call(fn.name, [args], [size])
+        steps.append(Case(f"{case.label}, step {k + 1} of {rollout.steps}",
+                          rollout.call(state)))
+        [out] = sandbox.call(fn.name, [steps[-1].args], [size])
         if out.status == "ok":
             assert out.value is not None
             valid = fn.check.validate(fn.name, out.value, want)
             if valid.error is None:
                 answers.append(valid.array)
-                args = rollout.advance(args, valid.array)
+                state = rollout.advance(state, valid.array)
                 continue
         ended = judge(fn, steps[-1], want, out, sandbox.memory_mb, locate, catalogue)
         reason = ended.reason if ended.kind == "not_implemented" else (
             f"step {k + 1} of {rollout.steps}: {ended.reason}")
-        return CaseResult(case, ended.kind, reason, None, expected[-1], ended.error), None
+        # an error the catalogue explains diagnoses the run
+        return (CaseResult(case, ended.kind, reason, None, expected[-1], ended.error),
+                ended if ended.kind == "error" else None)
     why = rollout.verdict(answers, expected, case.args)
     if why is None:
         return CaseResult(case, "pass", got=answers[-1], expected=expected[-1]), None

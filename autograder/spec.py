@@ -87,27 +87,41 @@ class Function:
     uses: tuple[Uses, ...] = ()
 
 
+def _same(x: Any) -> Any:
+    return x
+
+
 @dataclass(frozen=True)
 class Rollout:
     """Cases judged by what many calls in a row achieve: a simulation the student's function
-    steps. Each case's arguments start it; the grader, never the submission, carries the
-    state from one call to the next, ``advance(args, answer)`` giving the next call's
-    arguments; after ``steps`` calls ``verdict(answers, expected, start)`` compares the run
-    with the reference's (``expected``, the same rollout of the reference function) by what
-    they do (a rotation stays a rotation, a joint settles, a handle flips when it should):
+    steps. Each case's arguments start it (``start(args)``: the simulation's state, by
+    default the arguments themselves); the grader, never the submission, carries the state
+    from one call to the next: a call gets ``call(state)`` and ``advance(state, answer)``
+    is the next state. After ``steps`` calls ``verdict(answers, expected, args)`` compares
+    the run with the reference's (``expected``, the same rollout of the reference function)
+    by what they do (a rotation stays a rotation, a joint settles, a pushed body stands):
     None if it achieves what it should, else one sentence on what it did."""
 
     steps: int
-    advance: Callable[[tuple[Any, ...], Any], tuple[Any, ...]]
+    advance: Callable[[Any, Any], Any]
     verdict: Callable[[list[Any], list[Any], tuple[Any, ...]], str | None]
+    start: Callable[[tuple[Any, ...]], Any] = _same
+    call: Callable[[Any], tuple[Any, ...]] = _same
 
-    def run(self, step: Callable[..., Any], start: tuple[Any, ...]) -> list[Any]:
-        """The answers of ``step`` (the reference) over the whole rollout from ``start``."""
-        args, answers = start, []
+    def run(self, step: Callable[..., Any], args: tuple[Any, ...]) -> list[Any]:
+        """The answers of ``step`` (the reference) over the whole rollout from ``args``."""
+        state, answers = self.start(args), []
         for _ in range(self.steps):
-            answers.append(step(*args))
-            args = self.advance(args, answers[-1])
+            answers.append(step(*self.call(state)))
+            state = self.advance(state, answers[-1])
         return answers
+
+    def states(self, args: tuple[Any, ...], answers: list[Any]) -> list[Any]:
+        """The states a run from ``args`` went through with these answers, the first too."""
+        out = [self.start(args)]
+        for answer in answers:
+            out.append(self.advance(out[-1], answer))
+        return out
 
 
 @dataclass(frozen=True)

@@ -173,13 +173,13 @@ def test_minus_q_is_the_same_step_and_a_wrong_inertia_is_not():
 
 def test_the_notebook_beside_a_right_solution_scores_full_marks(tmp_path):
     """The notebook's display code names nothing a solution's helpers are likely called
-    (its demo chain is ``pose_of``, not ``chain``): graded with it, the solution keeps 9/9."""
+    (its demo chain is ``pose_of``, not ``chain``): graded with it, the solution keeps 10/10."""
     import shutil
 
     shutil.copy(REPO / "assignments" / "a6_physics.ipynb", tmp_path)
     shutil.copy(FIXTURES / "a6" / "reference.py", tmp_path / "a6_physics.py")
     result = check("a6", tmp_path / "a6_physics.ipynb", limits=LIMITS)
-    assert not result.problems and result.score == result.max_score == 9
+    assert not result.problems and result.score == result.max_score == 10
 
 
 @settings(max_examples=60, deadline=None)
@@ -213,7 +213,9 @@ def rollout_test(name: str):
 def test_the_reference_runs_do_what_the_verdicts_ask():
     """The reference T-handle turns over (the Dzhanibekov flip, first at 0.58 s here, then
     again and again), and every joint driven from 2-2.8 rad away is on its target and still
-    within 1° of it by 0.7 s; each run passes its own verdict."""
+    within 1° of it by 0.7 s; the pushed body's centre of mass strays less than 10 cm and
+    is back within 2 cm for the last 0.25 s, where the grader's posture PD alone lets it
+    fall; each run passes its own verdict."""
     test, cases = rollout_test("rigid_body_step: bodies simulated")
     fn = A6.function("rigid_body_step")
     for c in cases:
@@ -232,6 +234,15 @@ def test_the_reference_runs_do_what_the_verdicts_ask():
             states.append(test.rollout.advance(states[-1], tau))
         error = np.array([np.degrees(_apart(s[0], s[1])) for s in states])
         assert np.all(error[0] > 110) and np.all(error[int(0.7 / DRIVE_H):] < 1.0)
+    test, cases = rollout_test("balance_torque: a pushed body")
+    fn = A6.function("balance_torque")
+    for c in cases:
+        run = test.rollout.run(fn.reference, c.args)
+        states = test.rollout.states(c.args, run)
+        com = np.array([com_jacobian(s[0], *c.args[1:4])[0] - c.args[4] for s in states])
+        assert np.abs(com[:, 0]).max() < 0.1 and np.all(np.linalg.norm(com[-50:], axis=1) < 0.02)
+        limp = test.rollout.run(lambda *a: np.zeros(3), c.args)  # the posture PD alone
+        assert "the chain falls" in test.rollout.verdict(limp, run, c.args)
 
 
 @pytest.mark.parametrize(("key", "says"), [
@@ -242,13 +253,15 @@ def test_the_reference_runs_do_what_the_verdicts_ask():
     ("kd_sign", "rad from its target, turning at"),
     ("limit_ignored", "past the limit"),
     ("error_world_frame", "rad from its target"),
+    ("pseudo_inverse", "the chain falls"),
 ])
 def test_each_mistake_run_for_seconds_is_told_what_it_did(key, says):
     """Every listed mistake that shows in a run fails it (all its cases but maybe one), and
     the verdict says what the body or joint did, not which number differed."""
     mistake = next(m for m in A6.misconceptions if m.key == key)
     name = {"rigid_body_step": "rigid_body_step: bodies simulated",
-            "pd_torque": "pd_torque: joints driven from far"}[mistake.function]
+            "pd_torque": "pd_torque: joints driven from far",
+            "balance_torque": "balance_torque: a pushed body"}[mistake.function]
     test, cases = rollout_test(name)
     fn = A6.function(mistake.function)
 

@@ -396,10 +396,7 @@ def drive_run_verdict(answers: list[Any], expected: list[Any], start: tuple[Any,
     over = max(float(np.max(np.abs(a))) for a in answers)
     if over > limit * (1 + 1e-9):
         return f"a torque reached {over:.4g} N m, past the limit ±{limit:g} N m"
-    runs = [[start], [start]]
-    for run, torques in zip(runs, (answers, expected), strict=True):
-        for tau in torques:
-            run.append(_carry_joints(run[-1], np.asarray(tau)))
+    runs = [PD_RUN.states(start, answers), PD_RUN.states(start, expected)]
     end = runs[0][-1]
     away = _apart(start[0], start[1])
     off, spin = _apart(end[0], end[1]), np.linalg.norm(end[2], axis=1)
@@ -431,6 +428,9 @@ def pd_runs(rng: np.random.Generator) -> list[Case]:
              far(False)),
         Case("the same, the targets stored as -q̄", far(True)),
     ]
+
+
+PD_RUN = Rollout(DRIVE_RUN, _carry_joints, drive_run_verdict)
 
 
 # --- the balance torque ------------------------------------------------------------------------
@@ -540,6 +540,126 @@ def _shape_error(error: dict[str, Any], *args: Any) -> str | None:
     n = len(args[0])
     return (f"J_c is (2, {n}) and f is (2,): J_c @ f does not exist; the torques are "
             f"J_c.T @ f, shape ({n},)")
+
+
+# --- the balance torque holding up a pushed chain ----------------------------------------------
+
+#: a standing body as three links (shank, thigh, trunk with head): m, kg
+STAND_LENGTHS, STAND_MASSES = np.array([0.45, 0.45, 0.6]), np.array([8.0, 16.0, 36.0])
+STAND_RATIOS = np.array([0.55, 0.55, 0.4])
+#: the grader's own joint PD holding the posture: too weak at the ankle (50 N m/rad against
+#: gravity's M g h ≈ 500) for the chain to stand without the balance torque
+POSTURE_KP, POSTURE_KD = np.array([50.0, 600.0, 400.0]), np.array([5.0, 60.0, 40.0])
+GRAVITY = 9.81
+STAND_H = 0.005  # s
+STAND_RUN = 300  # steps: 1.5 s
+
+
+def _mass_matrix(theta: np.ndarray) -> np.ndarray:
+    """M(θ) of the standing chain: Σ m_i J_iᵀJ_i + I_i w_iwᵢᵀ (slender links, I = m l²/12)."""
+    joints, coms = chain_points(theta, STAND_LENGTHS, STAND_RATIOS)
+    n = len(theta)
+    M = np.zeros((n, n))
+    for i in range(n):
+        J = point_jacobian(joints, coms[i], i)
+        w = (np.arange(n) <= i).astype(float)
+        M += STAND_MASSES[i] * (J.T @ J + STAND_LENGTHS[i] ** 2 / 12 * np.outer(w, w))
+    return M
+
+
+def _chain_acceleration(theta: np.ndarray, dtheta: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    r"""θ̈ from Lagrange's equations, M θ̈ = τ + Q_g - (Ṁ θ̇ - ½ ∂(θ̇ᵀMθ̇)/∂θ), the velocity
+    terms by central differences of M (the grader's plant, the same for every run)."""
+    eps = 1e-6
+
+    def energy_slope(e: np.ndarray) -> float:
+        return float(dtheta @ (_mass_matrix(theta + eps * e) - _mass_matrix(theta - eps * e))
+                     @ dtheta / (2 * eps))
+
+    Mdot = (_mass_matrix(theta + eps * dtheta) - _mass_matrix(theta - eps * dtheta)) / (2 * eps)
+    bias = Mdot @ dtheta - 0.5 * np.array([energy_slope(e) for e in np.eye(len(theta))])
+    _, Jc = com_jacobian(theta, STAND_LENGTHS, STAND_MASSES, STAND_RATIOS)
+    weight = STAND_MASSES.sum() * Jc.T @ np.array([0.0, -GRAVITY])
+    out: np.ndarray = np.linalg.solve(_mass_matrix(theta), tau + weight - bias)
+    return out
+
+
+#: a run's state: joint angles, their rates, the posture held, the call's other arguments
+StandState = tuple[np.ndarray, np.ndarray, np.ndarray, tuple[Any, ...]]
+
+
+def _stand_start(args: tuple[Any, ...]) -> StandState:
+    """The pose of the call, pushed: the joint rates of least norm that give its ċ."""
+    _, Jc = com_jacobian(args[0], *args[1:4])
+    return args[0], np.linalg.pinv(Jc) @ args[5], args[0], args
+
+
+def _stand_call(state: StandState) -> tuple[Any, ...]:
+    theta, dtheta, _, args = state
+    _, Jc = com_jacobian(theta, *args[1:4])
+    return (theta, *args[1:5], Jc @ dtheta, *args[6:])
+
+
+def _fallen(theta: np.ndarray, args: tuple[Any, ...]) -> bool:
+    """Its centre of mass 0.3 m off the foot or below 60 % of its height: it has fallen."""
+    c, _ = com_jacobian(theta, *args[1:4])
+    return bool(abs(c[0]) > 0.3 or c[1] < 0.6 * args[4][1])
+
+
+def _carry_stand(state: StandState, tau: Any) -> StandState:
+    """One step of the chain under the balance torque and the grader's posture PD,
+    semi-implicit; a chain that has fallen stays where it lies."""
+    theta, dtheta, pose, args = state
+    if _fallen(theta, args):
+        return theta, np.zeros_like(dtheta), pose, args
+    total = np.asarray(tau) - POSTURE_KP * (theta - pose) - POSTURE_KD * dtheta
+    with np.errstate(all="ignore"):
+        dtheta = dtheta + STAND_H * _chain_acceleration(theta, dtheta, total)
+    if not np.all(np.isfinite(dtheta)):  # torques past anything a body could take
+        return theta, np.zeros_like(dtheta), pose, args
+    return theta + STAND_H * dtheta, dtheta, pose, args
+
+
+def stand_verdict(answers: list[Any], expected: list[Any], start: tuple[Any, ...]
+                  ) -> str | None:
+    """Whether the pushed chain falls, and where its centre of mass ends up."""
+    runs = [STAND.states(start, a)[1:] for a in (answers, expected)]
+    coms = [np.array([com_jacobian(s[0], *start[1:4])[0] for s in r]) - start[4] for r in runs]
+    t = STAND_H * np.arange(1, len(answers) + 1)
+    back = np.linalg.norm(coms[1], axis=1) > 0.02
+    settled = t[np.flatnonzero(back)[-1] + 1] if back.any() else t[0]
+    fell = [k for k, s in enumerate(runs[0]) if _fallen(s[0], start)]
+    if fell:
+        k = fell[0]
+        return (f"the chain falls: by t = {t[k]:.2f} s its centre of mass is "
+                f"{abs(coms[0][k][0]):.2f} m off the foot and {-coms[0][k][1]:.2f} m lower "
+                f"(the reference's strays at most {np.abs(coms[1][:, 0]).max() * 100:.0f} cm "
+                f"and is back within 2 cm by {settled:.2f} s)")
+    off = float(np.linalg.norm(coms[0][-1]))
+    if off > 0.02:
+        return (f"the chain stands but its centre of mass is still {off * 100:.1f} cm from its "
+                f"target after {t[-1]:g} s (the reference's is back within 2 cm by "
+                f"{settled:.2f} s)")
+    return None
+
+
+STAND = Rollout(STAND_RUN, _carry_stand, stand_verdict, _stand_start, _stand_call)
+
+
+def stand_runs(rng: np.random.Generator) -> list[Case]:
+    def pushed(pose: np.ndarray, push: float) -> tuple[Any, ...]:
+        c, _ = com_jacobian(pose, STAND_LENGTHS, STAND_MASSES, STAND_RATIOS)
+        pose = pose - np.array([np.arctan2(c[0], c[1]), 0.0, 0.0])  # its COM over the foot
+        c, _ = com_jacobian(pose, STAND_LENGTHS, STAND_MASSES, STAND_RATIOS)
+        return (pose, STAND_LENGTHS, STAND_MASSES, STAND_RATIOS, np.array([0.0, c[1]]),
+                np.array([push, 0.0]), float(rng.uniform(1400, 1600)),
+                float(rng.uniform(280, 320)))
+    return [
+        Case("a body standing straight, pushed forward (ċ = 0.6 m/s): it must not fall",
+             pushed(np.zeros(3), 0.6)),
+        Case("a body standing with bent knees, pushed backward (ċ = -0.5 m/s)",
+             pushed(np.array([0.1, -0.3, 0.25]), -0.5)),
+    ]
 
 
 # --- the catalogue of known mistakes -----------------------------------------------------------
@@ -696,8 +816,10 @@ ASSIGNMENT = Assignment(
         *random_edge_hidden("pd_torque", pd_random, pd_edges, pd_hidden),
         Test("pd_torque: a joint driven to its target", "pd_torque", 1.0, pd_drive),
         Test("pd_torque: joints driven from far for 0.9 s", "pd_torque", 1.0, pd_runs,
-             rollout=Rollout(DRIVE_RUN, _carry_joints, drive_run_verdict)),
+             rollout=PD_RUN),
         *random_edge_hidden("balance_torque", balance_random, balance_edges, balance_hidden),
+        Test("balance_torque: a pushed body kept standing for 1.5 s", "balance_torque", 1.0,
+             stand_runs, rollout=STAND),
     ),
     misconceptions=MISCONCEPTIONS,
 )
