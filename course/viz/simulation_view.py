@@ -28,6 +28,7 @@ from .scene import GHOST, SkeletonScene
 
 #: steps a slider offers (s): 1/1200 .. 1/60
 STEPS = (1 / 1200, 1 / 600, 1 / 300, 1 / 120, 1 / 60)
+WINDOW = (640, 420)  # px: the 3D view
 
 
 class _Stopped(Exception):
@@ -102,7 +103,7 @@ class SimulationView(Control):
             s.continuous_update = False  # one run per release, not one per pixel dragged
         self.readout = _readout(2)
         parents = clip.skeleton.parents
-        self.scene = SkeletonScene(window_size=(720, 420), camera="iso")
+        self.scene = SkeletonScene(window_size=WINDOW, camera="iso")
         p0 = self.clip_positions[0]
         frame = np.concatenate([self.clip_positions, self.clip_positions + self.offset], axis=1)
         self.scene.add_skeleton(parents, p0, name="captured", color=GHOST, frame_points=frame)
@@ -113,9 +114,16 @@ class SimulationView(Control):
         self.button = _fixed(widgets.Button(description="simulate again", icon="play",
                                             layout=widgets.Layout(width="160px")))
         self.button.on_click(lambda _b: self.simulate())
-        panel = widgets.VBox([*self.sliders.values(), self.button],
-                             layout=widgets.Layout(flex="0 0 auto"))
-        self.widget = widgets.VBox([self.scene.widget(), panel, self.readout])
+        # the controls beside the view, as notebook 13's: the whole fits a 1366x768 window
+        width = "360px"
+        panel = widgets.VBox([*self.sliders.values(), self.button, self.readout],
+                             layout=widgets.Layout(flex="0 0 auto", width=width,
+                                                   min_width=width, margin="0 12px 0 0"))
+        view = self.scene.widget()
+        w = f"{WINDOW[0]}px"
+        view.layout.width, view.layout.min_width, view.layout.flex = w, w, "0 0 auto"
+        self.widget = widgets.HBox([panel, view], layout=widgets.Layout(
+            align_items="flex-start", flex_flow="row wrap"))
 
     # -- simulating ----------------------------------------------------------------------------
 
