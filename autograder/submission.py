@@ -39,6 +39,7 @@ import errno
 import json
 import os
 import stat
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -289,11 +290,18 @@ def _json_type(value: object) -> str:
     return JSON_TYPES.get(type(value), type(value).__name__)
 
 
+#: ast.parse, one thread at a time: CPython keeps the AST builder's recursion depth in the
+#: interpreter, not the thread, and two threads grading at once (``--jobs``) can make it raise
+#: "SystemError: AST constructor recursion depth mismatch" on a good file (CPython gh-106905)
+_PARSING = threading.Lock()
+
+
 def _parse(code: str, filename: str = "<unknown>") -> ast.Module:
     """``ast.parse``, with every way hostile text breaks the parser as a SyntaxError: null
     bytes (a ValueError before Python 3.12) and nesting deeper than its stack."""
     try:
-        return ast.parse(code, filename=filename)
+        with _PARSING:
+            return ast.parse(code, filename=filename)
     except SyntaxError:
         raise
     except ValueError as exc:
