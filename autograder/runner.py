@@ -19,7 +19,7 @@ import numpy as np
 
 from .results import CaseResult, Result, TestResult
 from .sandbox import DEFAULT_LIMITS, Limits, Outcome, Sandbox, level_for
-from .spec import Assignment, Case, Function, Misconception, Rollout, Test, case_rng
+from .spec import Assignment, Case, Function, Misconception, Rollout, Run, Test, case_rng
 from .submission import Source, SubmissionError, import_problems, read_regular, read_source
 
 ASSIGNMENTS_DIR = Path(__file__).resolve().parents[1] / "assignments"
@@ -27,8 +27,8 @@ ASSIGNMENTS_DIR = Path(__file__).resolve().parents[1] / "assignments"
 
 @dataclass(frozen=True)
 class Prepared:
-    """A test with its cases and the reference's answers (a rollout's: the list of its
-    answers, step by step), computed once per seed."""
+    """A test with its cases and the reference's answers (a rollout's: its :class:`Run`),
+    computed once per seed."""
 
     test: Test
     cases: tuple[Case, ...]
@@ -174,46 +174,46 @@ def judge(fn: Function, case: Case, expected: Any, out: Outcome, memory_mb: int 
     return CaseResult(case, out.status, message, None, expected)
 
 
-def roll(fn: Function, rollout: Rollout, case: Case, expected: list[Any], sandbox: Sandbox,
+def roll(fn: Function, rollout: Rollout, case: Case, expected: Run, sandbox: Sandbox,
          locate: Callable[[int], str], catalogue: tuple[Misconception, ...]
          ) -> tuple[CaseResult, CaseResult | None]:
     """One rollout case: the student's function called ``rollout.steps`` times in the
     sandbox, the state carried between calls here, and the run judged by
-    ``rollout.verdict``. Also returns, if the run fails, its first step whose answer is
-    unlike the reference's on the same arguments (as a case of its own, for the diagnosis).
-    A call that raises, stops or answers in the wrong shape ends the run there (a raised
-    error is then the step the diagnosis reads)."""
+    ``rollout.verdict`` against the reference's (``expected``). Also returns, if the run
+    fails, its first step whose answer is unlike the reference's on the same arguments (as
+    a case of its own, for the diagnosis). A call that raises, stops or answers in the wrong
+    shape ends the run there (a raised error is then the step the diagnosis reads)."""
     steps: list[Case] = []
-    answers: list[Any] = []
-    size = 4 * _numbers(expected[0]) + 64
-    state = rollout.start(case.args)
-    for k, want in enumerate(expected):
+    run = Run([], [rollout.start(case.args)])
+    size = 4 * _numbers(expected.answers[0]) + 64
+    last = expected.answers[-1]
+    for k, want in enumerate(expected.answers):
         steps.append(Case(f"{case.label}, step {k + 1} of {rollout.steps}",
-                          rollout.call(state)))
+                          rollout.call(run.states[-1])))
         [out] = sandbox.call(fn.name, [steps[-1].args], [size])
         if out.status == "ok":
             assert out.value is not None
             valid = fn.check.validate(fn.name, out.value, want)
             if valid.error is None:
-                answers.append(valid.array)
-                state = rollout.advance(state, valid.array)
+                run.answers.append(valid.array)
+                run.states.append(rollout.advance(run.states[-1], valid.array))
                 continue
         ended = judge(fn, steps[-1], want, out, sandbox.memory_mb, locate, catalogue)
         reason = ended.reason if ended.kind == "not_implemented" else (
             f"step {k + 1} of {rollout.steps}: {ended.reason}")
         # an error the catalogue explains diagnoses the run
-        return (CaseResult(case, ended.kind, reason, None, expected[-1], ended.error),
+        return (CaseResult(case, ended.kind, reason, None, last, ended.error),
                 ended if ended.kind == "error" else None)
-    why = rollout.verdict(answers, expected, case.args)
+    why = rollout.verdict(run, expected, case.args)
     if why is None:
-        return CaseResult(case, "pass", got=answers[-1], expected=expected[-1]), None
+        return CaseResult(case, "pass", got=run.answers[-1], expected=last), None
     first_wrong = None
-    for step, got in zip(steps, answers, strict=True):
+    for step, got in zip(steps, run.answers, strict=True):
         reference = fn.reference(*step.args)
         if fn.check.judge(got, reference, step.args) is not None:
             first_wrong = CaseResult(step, "wrong", got=got, expected=reference)
             break
-    return CaseResult(case, "wrong", why, answers[-1], expected[-1]), first_wrong
+    return CaseResult(case, "wrong", why, run.answers[-1], last), first_wrong
 
 
 def _explained(m: Misconception, error: dict[str, Any], case: Case) -> str | None:

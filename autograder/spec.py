@@ -92,36 +92,38 @@ def _same(x: Any) -> Any:
 
 
 @dataclass(frozen=True)
+class Run:
+    """A rollout's ``answers``, call by call, and the ``states`` it went through (one more
+    than the answers: the first comes from the case's arguments)."""
+
+    answers: list[Any]
+    states: list[Any]
+
+
+@dataclass(frozen=True)
 class Rollout:
     """Cases judged by what many calls in a row achieve: a simulation the student's function
     steps. Each case's arguments start it (``start(args)``: the simulation's state, by
     default the arguments themselves); the grader, never the submission, carries the state
     from one call to the next: a call gets ``call(state)`` and ``advance(state, answer)``
-    is the next state. After ``steps`` calls ``verdict(answers, expected, args)`` compares
-    the run with the reference's (``expected``, the same rollout of the reference function)
-    by what they do (a rotation stays a rotation, a joint settles, a pushed body stands):
-    None if it achieves what it should, else one sentence on what it did."""
+    is the next state. After ``steps`` calls ``verdict(yours, reference, args)`` compares
+    the :class:`Run` with the reference function's by what they do (a rotation stays a
+    rotation, a joint settles, a pushed body stands): None if it achieves what it should,
+    else one sentence on what it did."""
 
     steps: int
     advance: Callable[[Any, Any], Any]
-    verdict: Callable[[list[Any], list[Any], tuple[Any, ...]], str | None]
+    verdict: Callable[[Run, Run, tuple[Any, ...]], str | None]
     start: Callable[[tuple[Any, ...]], Any] = _same
     call: Callable[[Any], tuple[Any, ...]] = _same
 
-    def run(self, step: Callable[..., Any], args: tuple[Any, ...]) -> list[Any]:
-        """The answers of ``step`` (the reference) over the whole rollout from ``args``."""
-        state, answers = self.start(args), []
+    def run(self, step: Callable[..., Any], args: tuple[Any, ...]) -> Run:
+        """The whole rollout from ``args`` with ``step`` (the reference) answering."""
+        run = Run([], [self.start(args)])
         for _ in range(self.steps):
-            answers.append(step(*self.call(state)))
-            state = self.advance(state, answers[-1])
-        return answers
-
-    def states(self, args: tuple[Any, ...], answers: list[Any]) -> list[Any]:
-        """The states a run from ``args`` went through with these answers, the first too."""
-        out = [self.start(args)]
-        for answer in answers:
-            out.append(self.advance(out[-1], answer))
-        return out
+            run.answers.append(step(*self.call(run.states[-1])))
+            run.states.append(self.advance(run.states[-1], run.answers[-1]))
+        return run
 
 
 @dataclass(frozen=True)

@@ -221,7 +221,7 @@ def test_the_reference_runs_do_what_the_verdicts_ask():
     for c in cases:
         run = test.rollout.run(fn.reference, c.args)
         assert test.rollout.verdict(run, run, c.args) is None
-        q, L = (np.array([a[i] for a in run]) for i in (2, 3))
+        q, L = (np.array([a[i] for a in run.answers]) for i in (2, 3))
         flips = _flips(q, L, c.args[5], c.args[8])
         assert (flips is not None) == ("T-handle" in c.label), c.label
         if flips is not None:
@@ -229,17 +229,14 @@ def test_the_reference_runs_do_what_the_verdicts_ask():
     test, cases = rollout_test("pd_torque: joints driven from far")
     fn = A6.function("pd_torque")
     for c in cases:
-        states = [c.args]
-        for tau in test.rollout.run(fn.reference, c.args):
-            states.append(test.rollout.advance(states[-1], tau))
+        states = test.rollout.run(fn.reference, c.args).states
         error = np.array([np.degrees(_apart(s[0], s[1])) for s in states])
         assert np.all(error[0] > 110) and np.all(error[int(0.7 / DRIVE_H):] < 1.0)
     test, cases = rollout_test("balance_torque: a pushed body")
     fn = A6.function("balance_torque")
     for c in cases:
         run = test.rollout.run(fn.reference, c.args)
-        states = test.rollout.states(c.args, run)
-        com = np.array([com_jacobian(s[0], *c.args[1:4])[0] - c.args[4] for s in states])
+        com = np.array([com_jacobian(s[0], *c.args[1:4])[0] - c.args[4] for s in run.states])
         assert np.abs(com[:, 0]).max() < 0.1 and np.all(np.linalg.norm(com[-50:], axis=1) < 0.02)
         limp = test.rollout.run(lambda *a: np.zeros(3), c.args)  # the posture PD alone
         assert "the chain falls" in test.rollout.verdict(limp, run, c.args)

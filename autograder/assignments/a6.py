@@ -28,7 +28,16 @@ from course import rotations as rot
 from course.physics.rigid_body import RigidBody, RigidState, step_rigid, t_handle
 
 from ..checks import Check, QuatCheck, TupleCheck, show
-from ..spec import Assignment, Case, Function, Misconception, Rollout, Test, random_edge_hidden
+from ..spec import (
+    Assignment,
+    Case,
+    Function,
+    Misconception,
+    Rollout,
+    Run,
+    Test,
+    random_edge_hidden,
+)
 
 # --- the rigid-body step -----------------------------------------------------------------------
 
@@ -174,14 +183,14 @@ def _times(t: np.ndarray) -> str:
     return ", ".join(f"{x:.2f} s" for x in t[:3]) + (" ..." if len(t) > 3 else "")
 
 
-def run_verdict(answers: list[Any], expected: list[Any], start: StepArgs) -> str | None:
+def run_verdict(yours: Run, reference: Run, start: StepArgs) -> str | None:
     """What a simulated body did wrong, if anything: its quaternion left the unit sphere,
     its angular momentum changed other than by the torque, it tumbled (flipped) unlike the
     reference, or its orientation or centre of mass left the reference's."""
-    x, _, q, L = (np.array([a[i] for a in answers]) for i in range(4))
-    xr, _, qr, _ = (np.array([a[i] for a in expected]) for i in range(4))
+    x, _, q, L = (np.array([a[i] for a in yours.answers]) for i in range(4))
+    xr, _, qr, _ = (np.array([a[i] for a in reference.answers]) for i in range(4))
     h, torque = start[8], np.asarray(start[7])
-    t = h * np.arange(1, len(answers) + 1)
+    t = h * np.arange(1, len(yours.answers) + 1)
     norm = np.linalg.norm(q, axis=1)
     k = int(np.argmax(np.abs(norm - 1)))
     if abs(norm[k] - 1) > 1e-6:
@@ -196,11 +205,11 @@ def run_verdict(answers: list[Any], expected: list[Any], start: StepArgs) -> str
     apart = _apart(q, qr)
     if apart.max() > 1e-3:
         k = int(np.argmax(apart > 1e-3))
-        yours, theirs = _flips(q, L, start[5], h), _flips(qr, L_exact, start[5], h)
+        mine, theirs = _flips(q, L, start[5], h), _flips(qr, L_exact, start[5], h)
         tumble = ""
-        if yours is not None and theirs is not None and (
-                len(yours) != len(theirs) or not np.allclose(yours, theirs, atol=0.05)):
-            tumble = (f"; it turns over at {_times(yours)}" if len(yours) else
+        if mine is not None and theirs is not None and (
+                len(mine) != len(theirs) or not np.allclose(mine, theirs, atol=0.05)):
+            tumble = (f"; it turns over at {_times(mine)}" if len(mine) else
                       "; it never turns over") + f", the reference's at {_times(theirs)}"
         return (f"its orientation leaves the reference's: {np.degrees(apart[k]):.3g}° apart "
                 f"at t = {t[k]:.2f} s, {np.degrees(apart[-1]):.3g}° at the end"
@@ -388,23 +397,22 @@ def _carry_joints(args: tuple[Any, ...], tau: np.ndarray) -> tuple[Any, ...]:
     return (q / np.linalg.norm(q, axis=1, keepdims=True), q_bar, omega, *gains)
 
 
-def drive_run_verdict(answers: list[Any], expected: list[Any], start: tuple[Any, ...]
-                      ) -> str | None:
+def drive_run_verdict(yours: Run, reference: Run, start: tuple[Any, ...]) -> str | None:
     """What joints driven by these torques did wrong, if anything: a torque past its limit,
     the long way round to a target, or still off target at the end."""
     limit = start[5]
-    over = max(float(np.max(np.abs(a))) for a in answers)
+    over = max(float(np.max(np.abs(a))) for a in yours.answers)
     if over > limit * (1 + 1e-9):
         return f"a torque reached {over:.4g} N m, past the limit ±{limit:g} N m"
-    runs = [PD_RUN.states(start, answers), PD_RUN.states(start, expected)]
+    runs = [yours.states, reference.states]
     end = runs[0][-1]
     away = _apart(start[0], start[1])
     off, spin = _apart(end[0], end[1]), np.linalg.norm(end[2], axis=1)
     j = int(np.argmax(off + spin))
     if off[j] > 0.01 or spin[j] > 0.1:
-        return (f"after {DRIVE_H * len(answers):.2g} s joint {j} is {off[j]:.3g} rad from its "
-                f"target, turning at {spin[j]:.3g} rad/s (it started {away[j]:.2f} rad away; "
-                "the reference's joints have settled)")
+        return (f"after {DRIVE_H * len(yours.answers):.2g} s joint {j} is {off[j]:.3g} rad "
+                f"from its target, turning at {spin[j]:.3g} rad/s (it started {away[j]:.2f} rad "
+                "away; the reference's joints have settled)")
     travel = [DRIVE_H * sum(np.linalg.norm(s[2], axis=1) for s in r[1:]) for r in runs]
     j = int(np.argmax(travel[0] - travel[1]))
     if travel[0][j] > travel[1][j] + 0.5:
@@ -555,32 +563,35 @@ STAND_H = 0.005  # s
 STAND_RUN = 300  # steps: 1.5 s
 
 
-def _mass_matrix(theta: np.ndarray) -> np.ndarray:
-    """M(θ) of the standing chain: Σ m_i J_iᵀJ_i + I_i w_iwᵢᵀ (slender links, I = m l²/12)."""
-    joints, coms = chain_points(theta, STAND_LENGTHS, STAND_RATIOS)
-    n = len(theta)
-    M = np.zeros((n, n))
-    for i in range(n):
-        J = point_jacobian(joints, coms[i], i)
-        w = (np.arange(n) <= i).astype(float)
-        M += STAND_MASSES[i] * (J.T @ J + STAND_LENGTHS[i] ** 2 / 12 * np.outer(w, w))
-    return M
+def _mass_matrices(thetas: np.ndarray) -> np.ndarray:
+    """M(θ) (B, n, n) of the standing chain at each row of ``thetas`` (B, n):
+    Σ m_i J_iᵀJ_i + I_i w_iw_iᵀ, J_i the Jacobian of link i's centre of mass (column j:
+    ẑ × (c_i - p_j) for the joints j <= i), w_i its angular one, slender links I = m l²/12."""
+    phi = np.cumsum(thetas, axis=1)  # as chain_points, for every row at once
+    bone = STAND_LENGTHS[:, None] * np.stack([-np.sin(phi), np.cos(phi)], axis=2)  # (B, n, 2)
+    joints = np.cumsum(bone, axis=1) - bone  # the joint at the bottom of each link
+    coms = joints + STAND_RATIOS[:, None] * bone
+    r = coms[:, :, None, :] - joints[:, None, :, :]  # (B, i, j, 2)
+    below = np.tril(np.ones((len(STAND_LENGTHS),) * 2))  # joint j moves link i when j <= i
+    J = np.stack([-r[..., 1], r[..., 0]], axis=2) * below[None, :, None, :]  # (B, i, 2, j)
+    spin = STAND_MASSES * STAND_LENGTHS**2 / 12
+    out: np.ndarray = (np.einsum("i,biaj,biak->bjk", STAND_MASSES, J, J)
+                       + np.einsum("i,ij,ik->jk", spin, below, below))
+    return out
 
 
 def _chain_acceleration(theta: np.ndarray, dtheta: np.ndarray, tau: np.ndarray) -> np.ndarray:
     r"""θ̈ from Lagrange's equations, M θ̈ = τ + Q_g - (Ṁ θ̇ - ½ ∂(θ̇ᵀMθ̇)/∂θ), the velocity
-    terms by central differences of M (the grader's plant, the same for every run)."""
-    eps = 1e-6
-
-    def energy_slope(e: np.ndarray) -> float:
-        return float(dtheta @ (_mass_matrix(theta + eps * e) - _mass_matrix(theta - eps * e))
-                     @ dtheta / (2 * eps))
-
-    Mdot = (_mass_matrix(theta + eps * dtheta) - _mass_matrix(theta - eps * dtheta)) / (2 * eps)
-    bias = Mdot @ dtheta - 0.5 * np.array([energy_slope(e) for e in np.eye(len(theta))])
+    terms from central differences ∂M/∂θ_k (the grader's plant, the same for every run)."""
+    eps, n = 1e-6, len(theta)
+    nudged = theta + eps * np.concatenate([np.eye(n), -np.eye(n)])
+    M, *around = _mass_matrices(np.vstack([theta, nudged]))
+    slopes = (np.asarray(around[:n]) - np.asarray(around[n:])) / (2 * eps)  # ∂M/∂θ_k
+    Mdot = np.einsum("k,kij->ij", dtheta, slopes)
+    bias = Mdot @ dtheta - 0.5 * np.einsum("i,kij,j->k", dtheta, slopes, dtheta)
     _, Jc = com_jacobian(theta, STAND_LENGTHS, STAND_MASSES, STAND_RATIOS)
     weight = STAND_MASSES.sum() * Jc.T @ np.array([0.0, -GRAVITY])
-    out: np.ndarray = np.linalg.solve(_mass_matrix(theta), tau + weight - bias)
+    out: np.ndarray = np.linalg.solve(M, tau + weight - bias)
     return out
 
 
@@ -620,12 +631,11 @@ def _carry_stand(state: StandState, tau: Any) -> StandState:
     return theta + STAND_H * dtheta, dtheta, pose, args
 
 
-def stand_verdict(answers: list[Any], expected: list[Any], start: tuple[Any, ...]
-                  ) -> str | None:
+def stand_verdict(yours: Run, reference: Run, start: tuple[Any, ...]) -> str | None:
     """Whether the pushed chain falls, and where its centre of mass ends up."""
-    runs = [STAND.states(start, a)[1:] for a in (answers, expected)]
+    runs = [yours.states[1:], reference.states[1:]]
     coms = [np.array([com_jacobian(s[0], *start[1:4])[0] for s in r]) - start[4] for r in runs]
-    t = STAND_H * np.arange(1, len(answers) + 1)
+    t = STAND_H * np.arange(1, len(yours.answers) + 1)
     back = np.linalg.norm(coms[1], axis=1) > 0.02
     settled = t[np.flatnonzero(back)[-1] + 1] if back.any() else t[0]
     fell = [k for k, s in enumerate(runs[0]) if _fallen(s[0], start)]
