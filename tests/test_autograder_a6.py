@@ -16,7 +16,6 @@ from autograder import check
 from autograder.assignments import load
 from autograder.assignments.a6 import (
     DRIVE_H,
-    _apart,
     _flips,
     balance_formula,
     chain_points,
@@ -28,6 +27,7 @@ from autograder.assignments.a6 import (
     step_formula,
 )
 from autograder.spec import case_rng
+from course import rotations as rot
 from course.physics.rigid_body import RigidState, simulate_rigid, t_handle
 
 REPO = Path(__file__).resolve().parents[1]
@@ -225,12 +225,13 @@ def test_the_reference_runs_do_what_the_verdicts_ask():
         flips = _flips(q, L, c.args[5], c.args[8])
         assert (flips is not None) == ("T-handle" in c.label), c.label
         if flips is not None:
-            assert 0.5 < flips[0] < 0.65 and len(flips) >= 3
+            # the times assignments/a6_physics.ipynb quotes (to a step either way)
+            np.testing.assert_allclose(flips[:3], [0.58, 0.91, 1.18], atol=0.011)
     test, cases = rollout_test("pd_torque: joints driven from far")
     fn = A6.function("pd_torque")
     for c in cases:
         states = test.rollout.run(fn.reference, c.args).states
-        error = np.array([np.degrees(_apart(s[0], s[1])) for s in states])
+        error = np.array([np.degrees(rot.quat_angle(s[0], s[1])) for s in states])
         assert np.all(error[0] > 110) and np.all(error[int(0.7 / DRIVE_H):] < 1.0)
     test, cases = rollout_test("balance_torque: a pushed body")
     fn = A6.function("balance_torque")

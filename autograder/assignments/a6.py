@@ -156,14 +156,6 @@ def _carry_body(args: StepArgs, answer: Any) -> StepArgs:
     return (x, v, q, L, *args[4:])
 
 
-def _apart(q: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """The angles (rad) between the rotations of rows of ``q`` and ``r`` (q ~ -q)."""
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    r = r / np.linalg.norm(r, axis=-1, keepdims=True)
-    out: np.ndarray = 2 * np.arccos(np.clip(np.abs(np.sum(q * r, axis=-1)), 0.0, 1.0))
-    return out
-
-
 def _flips(q: np.ndarray, L: np.ndarray, inertia_body: np.ndarray, h: float
            ) -> np.ndarray | None:
     """The times a body spun about its intermediate principal axis turns over (its spin about
@@ -202,7 +194,7 @@ def run_verdict(yours: Run, reference: Run, start: StepArgs) -> str | None:
     if off[k] > 1e-9 * (1 + np.linalg.norm(L_exact[k])):
         return (f"L is {show(L[k], 4)} at t = {t[k]:.2f} s, where L₀ + t τ = "
                 f"{show(L_exact[k], 4)}: angular momentum changes only by the torque")
-    apart = _apart(q, qr)
+    apart = rot.quat_angle(q, qr)
     if apart.max() > 1e-3:
         k = int(np.argmax(apart > 1e-3))
         mine, theirs = _flips(q, L, start[5], h), _flips(qr, L_exact, start[5], h)
@@ -406,8 +398,8 @@ def drive_run_verdict(yours: Run, reference: Run, start: tuple[Any, ...]) -> str
         return f"a torque reached {over:.4g} N m, past the limit ±{limit:g} N m"
     runs = [yours.states, reference.states]
     end = runs[0][-1]
-    away = _apart(start[0], start[1])
-    off, spin = _apart(end[0], end[1]), np.linalg.norm(end[2], axis=1)
+    away = rot.quat_angle(start[0], start[1])
+    off, spin = rot.quat_angle(end[0], end[1]), np.linalg.norm(end[2], axis=1)
     j = int(np.argmax(off + spin))
     if off[j] > 0.01 or spin[j] > 0.1:
         return (f"after {DRIVE_H * len(yours.answers):.2g} s joint {j} is {off[j]:.3g} rad "
