@@ -126,6 +126,7 @@ FLOOR = Isolation.CHROOT
 # RLIMIT_NPROC of the child: its threads (both levels refuse new processes; the count is per
 # user namespace with bubblewrap, per leased user at the chroot level).
 TASKS = {Isolation.BUBBLEWRAP: 32, Isolation.CHROOT: 32}
+START_ATTEMPTS = 3  # starts of one child that bubblewrap itself may refuse before we give up
 # Keyed by the levels, looked up by them or by their names (a Result holds the name).
 ISOLATION_NOTES: dict[str, str] = {
     Isolation.BUBBLEWRAP: "",
@@ -487,7 +488,46 @@ class Sandbox:
                 "--seccomp", str(fds[0]), "--chdir", f"{INSIDE}/work", "--", *cmd], fds
 
     def start(self) -> Outcome:
-        """Start a child and wait until the submission is loaded (status ``ok`` if it is)."""
+        """Start a child and wait until the submission is loaded (status ``ok`` if it is).
+
+        bubblewrap that could not build the box (a namespace or mount the kernel refused, as
+        it may for want of a resource under load) exits with code 1 and its reason on
+        stderr, before the submission runs: that start is tried again
+        (:data:`START_ATTEMPTS` in all), and if it never succeeds the reason is reported."""
+        for _ in range(START_ATTEMPTS):
+            logged = self._logged()
+            started = self._start_once()
+            refused = self._refusal(logged) if started.status == "crash" else None
+            if refused is None:
+                return started
+        return Outcome("crash", message=f"the sandbox could not start ({refused}); this is the "
+                                        "grading machine's fault, not your code's")
+
+    def _logged(self) -> int:
+        """How many bytes the child's output log holds now."""
+        try:
+            return os.path.getsize(self.stdout)
+        except OSError:
+            return 0
+
+    def _refusal(self, logged: int) -> str | None:
+        """bubblewrap's own reason if the child that just ended was bwrap refusing to start
+        (exit code 1, its first line after ``logged`` bytes of the log begins ``bwrap:``)."""
+        child = self._spawned
+        if self.level is not Isolation.BUBBLEWRAP or child is None or child.returncode != 1:
+            return None
+        try:
+            with open(self.stdout, "rb") as f:
+                f.seek(logged)
+                line = f.read(500).decode("utf-8", "replace").partition("\n")[0].strip()
+        except OSError:
+            return None
+        if not line.startswith("bwrap:"):
+            return None
+        os.truncate(self.stdout, logged)  # bwrap's words, not the submission's output
+        return line
+
+    def _start_once(self) -> Outcome:
         if time.monotonic() >= self.deadline:
             return Outcome("timeout", message=self._budget_message())
         config = {"functions": self.functions, "allowed": self.allowed,

@@ -497,3 +497,36 @@ def test_any_frame_costs_its_case_at_most_never_the_grader(tmp_path, value, garb
     verdict = judge(fn, test.cases[0], test.expected[0], Outcome("ok", value=got), 600,
                     str, A1.misconceptions_of(fn.name))
     assert verdict.kind in ("pass", "wrong", "invalid") and verdict.reason is not None
+
+
+REFUSAL = "bwrap: Creating new namespace failed: Resource temporarily unavailable"
+
+
+@BUBBLEWRAP
+@pytest.mark.parametrize("refusals", [2, 99])
+def test_a_start_bubblewrap_refused_is_tried_again_and_then_named(refusals, monkeypatch):
+    """bubblewrap that cannot build the box exits with code 1 and says why on stderr before
+    the submission runs: the start is tried again, and if it never succeeds the report
+    names bubblewrap's reason instead of blaming the student's code."""
+    import autograder.sandbox
+
+    starts = []
+    command = autograder.sandbox.Sandbox._command
+
+    def refusing(self, config, program=None):
+        cmd, fds = command(self, config, program)
+        starts.append(cmd)
+        if len(starts) > refusals:
+            return cmd, fds
+        return ["/bin/sh", "-c", f'echo "{REFUSAL}" >&2; exit 1', "sh", *cmd], fds
+
+    monkeypatch.setattr(autograder.sandbox.Sandbox, "_command", refusing)
+    result = check("a1", REPO / "tests/fixtures/a1/reference.py", limits=LIMITS)
+    if refusals < autograder.sandbox.START_ATTEMPTS:
+        assert result.score == result.max_score, str(result)
+        assert not result.output  # bwrap's words are not shown as the student's
+        return
+    assert result.score == 0
+    text = one_line(result)
+    assert f"the sandbox could not start ({REFUSAL}); this is the grading machine's" in text
+    assert "exited (code" not in text
