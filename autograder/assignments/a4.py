@@ -23,7 +23,9 @@ Reference: :func:`course.fk.tree_path`, :func:`course.ik.solve`,
 
 from __future__ import annotations
 
-from typing import Any
+import functools
+from collections.abc import Callable, Iterator
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -71,9 +73,37 @@ def path_length(parents, offsets, fixed: int, effector: int) -> float:
     return float(sum(_norm(offsets[max(a, b)]) for a, b in zip(path, path[1:], strict=False)))
 
 
-def ik_problems(got, parents, offsets, local_quats, root_position, fixed, effector, target,
-                iterations) -> list[str]:
-    """What is wrong with ``got`` as an ``ik_local`` answer, worst first."""
+class IKCase(NamedTuple):
+    """The arguments of one ``ik_local`` call, in the template's order: a case's ``args``,
+    which the student's function and the reference take positionally."""
+
+    parents: np.ndarray
+    offsets: np.ndarray
+    local_quats: np.ndarray
+    root_position: np.ndarray
+    fixed: int
+    effector: int
+    target: np.ndarray
+    iterations: int
+
+    @property
+    def path(self) -> list[int]:
+        """The joints that may turn, from the fixed joint to the end effector."""
+        return tree_path(np.asarray(self.parents), self.fixed, self.effector)
+
+    @property
+    def scale(self) -> float:
+        """The path's length, the unit of the case's tolerances."""
+        return path_length(self.parents, self.offsets, self.fixed, self.effector)
+
+    def fk(self, quats) -> tuple[np.ndarray, np.ndarray]:
+        """World positions and orientations for the local rotations ``quats``, joint 0 at
+        the root position."""
+        return ref_fk(self.parents, self.offsets, quats, self.root_position)
+
+
+def ik_problems(got, case: IKCase) -> list[str]:
+    """What is wrong with ``got`` as an ``ik_local`` answer to ``case``, worst first."""
     got = np.asarray(got, dtype=float)
     out = []
     norms = _norm(got)
@@ -81,7 +111,9 @@ def ik_problems(got, parents, offsets, local_quats, root_position, fixed, effect
     if bad.size:
         return [f"joint {bad[0]} is not a unit quaternion (|q| = {norms[bad[0]]:.4g}); rotations "
                 "need |q| = 1"]
-    path = tree_path(np.asarray(parents), fixed, effector)
+    parents, local_quats, fixed, effector = (case.parents, case.local_quats, case.fixed,
+                                             case.effector)
+    path = case.path
     off = np.array([j for j in range(len(parents)) if j not in path], dtype=int)
     turned = off[_angle(got[off], local_quats[off]) > ROTATION_TOL] if off.size else off
     if turned.size:
@@ -91,9 +123,9 @@ def ik_problems(got, parents, offsets, local_quats, root_position, fixed, effect
                    + (f"; {turned.size} such joints" if turned.size > 1 else "")
                    + "); only the joints on the path turn, the others keep R_j and move "
                    "rigidly with their parents")
-    scale = max(path_length(parents, offsets, fixed, effector), 1e-12)
-    P0, Q0 = ref_fk(parents, offsets, local_quats, root_position)
-    P, Q = ref_fk(parents, offsets, got, root_position)
+    scale = max(case.scale, 1e-12)
+    P0, Q0 = case.fk(local_quats)
+    P, Q = case.fk(got)
     shift = P0[fixed] - P[fixed]
     if goes_up(parents, fixed, effector):
         turn = float(_angle(Q[fixed], Q0[fixed]))
@@ -104,7 +136,7 @@ def ik_problems(got, parents, offsets, local_quats, root_position, fixed, effect
     elif _norm(shift) > HOLD_TOL * scale:
         out.append(f"the fixed joint {fixed} moved by {float(_norm(shift)):.3g}; it stays where "
                    "it is")
-    miss = float(_norm(P[effector] + shift - target))
+    miss = float(_norm(P[effector] + shift - case.target))
     if miss > REACH_TOL * scale:
         out.append(f"with the fixed joint {fixed} kept in place, the end effector (joint "
                    f"{effector}) stopped {miss:.3g} from the target (tolerance "
@@ -120,7 +152,7 @@ class IKLocalCheck(QuatCheck):
         super().__init__(shape=None)
 
     def judge(self, got: Any, expected: Any, args: tuple[Any, ...]) -> str | None:
-        problems = ik_problems(got, *args)
+        problems = ik_problems(got, IKCase(*args))
         return problems[0] if problems else None
 
     def show_expected(self, expected: Any, digits: int = 3) -> str:
@@ -218,12 +250,12 @@ def _solve_reference(parents, offsets, local_quats, root_position, fixed, effect
     return np.array(result.local_rotations)
 
 
-def _reaches(args) -> bool:
+def _reaches(case: IKCase) -> bool:
     """Whether the reference (DLS) and CCD, the method the template suggests, both solve the
     case within a quarter of its iterations (so a correct solver that differs in its details
     has room to spare)."""
-    quick = (*args[:-1], max(1, args[-1] // 4))
-    return not any(ik_problems(_solve_reference(*quick, method=m), *args)
+    quick = case._replace(iterations=max(1, case.iterations // 4))
+    return not any(ik_problems(_solve_reference(*quick, method=m), case)
                    for m in ("dls", "ccd"))
 
 
@@ -240,10 +272,10 @@ def ik_case(rng, parents, offsets, fixed: int, effector: int, label: str, spread
         P, _ = ref_fk(parents, offsets, quats, root)
         d = rng.normal(size=3)
         target = P[effector] + rng.uniform(0.3, 1.0) * reach * scale * d / _norm(d)
-        args = (np.asarray(parents, dtype=np.int64), np.asarray(offsets, float), quats, root,
-                int(fixed), int(effector), target, ITERATIONS)
-        if _reaches(args):
-            return Case(label, args)
+        case = IKCase(np.asarray(parents, dtype=np.int64), np.asarray(offsets, float), quats,
+                      root, int(fixed), int(effector), target, ITERATIONS)
+        if _reaches(case):
+            return Case(label, case)
     return None
 
 
@@ -540,123 +572,174 @@ def _same_bones_as(variant):
 # --- the catalogue of known mistakes -----------------------------------------------------------
 
 
-def _joint0_held(got, parents, offsets, local_quats, root_position, fixed, effector, target,
-                 iterations):
+def _of_case(symptom: Callable[[Any, IKCase], bool]) -> Callable[..., bool]:
+    """``symptom(got, case)`` as the grader calls a symptom, ``(got, *args)``."""
+    @functools.wraps(symptom)
+    def called(got: Any, *args: Any) -> bool:
+        return symptom(got, IKCase(*args))
+    return called
+
+
+def _joint0_held(got, case: IKCase) -> bool:
     """Solved as if joint 0 were held, not the fixed joint (a solver whose turns all swing
     the subtree below the pivot): wrong, and the fixed joint turned in the world (held
     joint 0 or not, a solver that holds it turns it with its leg), or, in plain forward
     kinematics (joint 0 at ``root_position``), the fixed joint moved and the effector is
     closer to the target than at the start and than with the fixed joint put back."""
-    if fixed == 0 or not goes_up(parents, fixed, effector):
+    fixed, effector, target = case.fixed, case.effector, case.target
+    if fixed == 0 or not goes_up(case.parents, fixed, effector):
         return False
-    args = (parents, offsets, local_quats, root_position, fixed, effector, target, iterations)
-    if not ik_problems(got, *args):
+    if not ik_problems(got, case):
         return False
-    scale = path_length(parents, offsets, fixed, effector)
-    P0, Q0 = ref_fk(parents, offsets, local_quats, root_position)
-    P, Q = ref_fk(parents, offsets, rot.quat_normalize(np.asarray(got, float)), root_position)
+    P0, Q0 = case.fk(case.local_quats)
+    P, Q = case.fk(rot.quat_normalize(np.asarray(got, float)))
     if _angle(Q[fixed], Q0[fixed]) > HOLD_TOL:
         return True
     moved = P[fixed] - P0[fixed]
     plain = _norm(P[effector] - target)
-    return bool(_norm(moved) > REACH_TOL * scale and plain < _norm(P0[effector] - target)
+    return bool(_norm(moved) > REACH_TOL * case.scale and plain < _norm(P0[effector] - target)
                 and plain < _norm(P[effector] - moved - target))
 
 
-def _world_turns_as_local(got, parents, offsets, local_quats, root_position, fixed, effector,
-                          target, iterations):
+def _world_turns_as_local(got, case: IKCase) -> bool:
     """Right once read as the lab report wrote it back: each answer R'_j = D_j R_j is a world
     turn D_j applied to a local rotation; applied to the world orientation instead,
     Q'_j = D_j Q_j, then R_j = Q'_{p(j)}^{-1} Q'_j, the rotations are a right answer."""
     got = rot.quat_normalize(np.asarray(got, float))
-    _, Q = ref_fk(parents, offsets, local_quats, root_position)
-    turns = rot.quat_mul(got, rot.quat_conjugate(local_quats))
-    fixed_up = np.array(local_from_global(parents, rot.quat_mul(turns, Q)))
-    return not ik_problems(fixed_up, parents, offsets, local_quats, root_position, fixed,
-                           effector, target, iterations)
+    _, Q = case.fk(case.local_quats)
+    turns = rot.quat_mul(got, rot.quat_conjugate(case.local_quats))
+    fixed_up = np.array(local_from_global(case.parents, rot.quat_mul(turns, Q)))
+    return not ik_problems(fixed_up, case)
 
 
-def _world_returned(got, parents, offsets, local_quats, root_position, fixed, effector,
-                    target, iterations):
+def _world_returned(got, case: IKCase) -> bool:
     """Right once read as world orientations: R_i = Q_{p(i)}^{-1} Q_i of the answer is a
     right answer (and the answer itself is not)."""
-    args = (parents, offsets, local_quats, root_position, fixed, effector, target, iterations)
     got = rot.quat_normalize(np.asarray(got, float))
-    if not ik_problems(got, *args):
+    if not ik_problems(got, case):
         return False
-    return not ik_problems(np.array(local_from_global(parents, got)), *args)
+    return not ik_problems(np.array(local_from_global(case.parents, got)), case)
 
 
-def ccd_local_turns(parents, offsets, local_quats, root_position, fixed, effector, target,
-                    iterations):
-    """CCD on the local rotations with the world turn multiplied on, R_a ← D R_a, each pivot
-    of the path from the effector back, forward kinematics from joint 0 each time (the lab
-    report's bug inside the loop): the rotations after each sweep, up to ``iterations``."""
-    parents = np.asarray(parents)
-    R = np.array(local_quats, dtype=float)
-    path = tree_path(parents, fixed, effector)
-    for _ in range(iterations):
-        for a in path[-2::-1]:
-            P, _ = ref_fk(parents, offsets, R, root_position)
-            u, v = P[effector] - P[a], target - P[a]
-            if _norm(u) < 1e-12 or _norm(v) < 1e-12:
+class _WorldTurns:
+    """The template's turn: ``D`` applied in world space about ``p_a`` to the part of the
+    body beyond ``a`` seen from the fixed joint (``a``'s subtree on the way down, all but it
+    on the way up), ``p_k ← p_a + D (p_k - p_a)``, ``Q_k ← D Q_k``; the local rotations are
+    read off at the end, ``R_i = Q_{p(i)}^{-1} Q_i``. The common ancestor entered from below
+    is no pivot: its edges up and down are one rigid body."""
+
+    def __init__(self, case: IKCase) -> None:
+        self.parents, self.path = np.asarray(case.parents), case.path
+        self.P, self.Q = (np.array(a) for a in case.fk(case.local_quats))
+        self.beyond: dict[int, np.ndarray] = {}  # a pivot's index: the joints its turn moves
+        for k, (a, b) in enumerate(zip(self.path[:-1], self.path[1:], strict=True)):
+            down = self.parents[b] == a
+            if down and k and self.parents[self.path[k - 1]] == a:
                 continue
-            R[a] = rot.quat_mul(rot.quat_between(u, v), R[a])
-        yield R.copy()
+            below = np.array([a in tree_path(self.parents, j, 0)
+                              for j in range(len(self.parents))])
+            self.beyond[k] = below if down else ~below
+        self.pivots = list(self.beyond)
+
+    def turn(self, k: int, D: np.ndarray) -> None:
+        a, moving = self.path[k], self.beyond[k]
+        self.P[moving] = self.P[a] + rot.quat_rotate(D, self.P[moving] - self.P[a])
+        self.Q[moving] = rot.quat_mul(D, self.Q[moving])
+
+    def rotations(self) -> np.ndarray:
+        return np.array(local_from_global(self.parents, self.Q))
 
 
-def _local_turns_in_loop(got, *args) -> bool:
-    """Wrong, and the rotations of :func:`ccd_local_turns` after some number of sweeps
-    (loosely, 1e-2, as :func:`_wrong_joint`: a CCD that does not converge wanders)."""
-    g = np.asarray(got, dtype=float)
-    if not ik_problems(g, *args):
-        return False
-    return any(bool(np.all(np.minimum(np.abs(g - w).max(-1), np.abs(g + w).max(-1)) <= 1e-2))
-               for w in ccd_local_turns(*args))
+class _LocalTurns:
+    """The lab report's bug inside the loop: the world turn multiplied onto the pivot's local
+    rotation, ``R_a ← D R_a``, then forward kinematics from joint 0 (held at the root
+    position); every joint of the path but the end effector is a pivot."""
+
+    def __init__(self, case: IKCase) -> None:
+        self.case, self.path = case, case.path
+        self.R = np.array(case.local_quats, dtype=float)
+        self.P, _ = case.fk(self.R)
+        self.pivots = list(range(len(self.path) - 1))
+
+    def turn(self, k: int, D: np.ndarray) -> None:
+        a = self.path[k]
+        self.R[a] = rot.quat_mul(D, self.R[a])
+        self.P, _ = self.case.fk(self.R)
+
+    def rotations(self) -> np.ndarray:
+        return self.R.copy()
 
 
-def ccd_about_fixed(parents, offsets, local_quats, root_position, fixed, effector, target,
-                    iterations, lever: int = 0):
-    """The template's CCD, written out: sweeps from the effector back to the fixed joint, each
-    turn ``D`` (the shortest arc from e - p_a to t - p_a) applied about ``p_a`` to the part
-    beyond ``a``, then ``R_i = Q_{p(i)}^{-1} Q_i``; stops within 1e-5 × the path's length.
-    ``lever = 1`` measures the arc at the next joint of the path instead (the pivot family's
-    wrong joint; a joint whose lever is the effector has no turn)."""
-    parents = np.asarray(parents)
-    P, Q = (np.array(a) for a in ref_fk(parents, offsets, local_quats, root_position))
-    path = tree_path(parents, fixed, effector)
-    inside = [np.array([a in tree_path(parents, j, 0) for j in range(len(parents))])
-              for a in range(len(parents))]  # inside[a][j]: j in the subtree of a
-    pivots = []
-    for k, (a, b) in enumerate(zip(path[:-1], path[1:], strict=True)):
-        if parents[b] == a and k and parents[path[k - 1]] == a:
-            continue  # the common ancestor entered from below has no turn of its own
-        pivots.append((k, a, inside[a] if parents[b] == a else ~inside[a]))
-    scale = path_length(parents, offsets, fixed, effector)
-    for _ in range(iterations):
-        if _norm(P[effector] - target) < 1e-5 * scale:
-            break
-        for k, a, moving in pivots[::-1]:
+def ccd_sweeps(case: IKCase, turns: _WorldTurns | _LocalTurns, lever: int = 0,
+               tol: float = 0.0) -> Iterator[np.ndarray]:
+    """The template's CCD written out, with the two rules its mistakes change: where each
+    arc is measured, and how its turn is applied.
+
+    Each sweep visits the pivots from the end effector back to the fixed joint; at the pivot
+    ``a = path[k]`` the turn ``D`` is the shortest arc from ``e - p_m`` to ``t - p_m``,
+    measured at ``m = path[k + lever]``.
+
+    Parameters
+    ----------
+    case : IKCase
+    turns : _WorldTurns or _LocalTurns
+        The pose to turn, changed in place: its joint positions ``P``, where the arcs are
+        measured; its ``pivots``, indices into the path; and how a turn applies, the
+        template's way about the pivot or multiplied onto a local rotation (the "world as
+        local" mistake).
+    lever : int
+        0: the arc measured at the pivot, as the template says. 1: at the next joint of the
+        path (the pivot family's wrong joint; a pivot whose next joint is the end effector
+        then has no turn).
+    tol : float
+        Stop before a sweep once the end effector is within ``tol`` of the target (0: run
+        every one of the case's iterations).
+
+    Yields
+    ------
+    ndarray, shape (J, 4)
+        The local rotations after each sweep.
+    """
+    path, effector, target = case.path, case.effector, case.target
+    for _ in range(case.iterations):
+        if _norm(turns.P[effector] - target) < tol:
+            return
+        for k in turns.pivots[::-1]:
             m = path[min(k + lever, len(path) - 1)]
-            u, v = P[effector] - P[m], target - P[m]
+            u, v = turns.P[effector] - turns.P[m], target - turns.P[m]
             if m == effector or _norm(u) < 1e-12 or _norm(v) < 1e-12:
                 continue
-            D = rot.quat_between(u, v)
-            P[moving] = P[a] + rot.quat_rotate(D, P[moving] - P[a])
-            Q[moving] = rot.quat_mul(D, Q[moving])
-    return np.array(local_from_global(parents, Q))
+            turns.turn(k, rot.quat_between(u, v))
+        yield turns.rotations()
 
 
-def _wrong_joint(got, *args):
-    """Wrong, and the rotations of the template's CCD with each arc measured at the next
-    joint. Loosely (1e-2): a CCD that does not converge wanders, and over many sweeps
-    rounding alone parts two implementations of the same steps by up to ~1e-3."""
-    g = np.asarray(got, dtype=float)
-    if not ik_problems(g, *args):
-        return False
-    wrong = ccd_about_fixed(*args, lever=1)
-    return bool(np.all(np.minimum(np.abs(g - wrong).max(-1), np.abs(g + wrong).max(-1))
+def _same_rotations(got: np.ndarray, model: np.ndarray) -> bool:
+    """Every joint's rotation as the model's, either sign, loosely (1e-2): a CCD that does
+    not converge wanders, and over many sweeps rounding alone parts two implementations of
+    the same steps by up to ~1e-3."""
+    return bool(np.all(np.minimum(np.abs(got - model).max(-1), np.abs(got + model).max(-1))
                        <= 1e-2))
+
+
+def _local_turns_in_loop(got, case: IKCase) -> bool:
+    """Wrong, and the rotations after some sweep of CCD with each world turn multiplied on
+    the local rotation inside the loop."""
+    g = np.asarray(got, dtype=float)
+    if not ik_problems(g, case):
+        return False
+    return any(_same_rotations(g, w) for w in ccd_sweeps(case, _LocalTurns(case)))
+
+
+def _wrong_joint(got, case: IKCase) -> bool:
+    """Wrong, and the rotations of the template's CCD with each arc measured at the next
+    joint, stopped as the template says (the effector within 1e-5 × the path's length)."""
+    g = np.asarray(got, dtype=float)
+    if not ik_problems(g, case):
+        return False
+    turns = _WorldTurns(case)
+    for _ in ccd_sweeps(case, turns, lever=1, tol=1e-5 * case.scale):
+        pass
+    return _same_rotations(g, turns.rotations())
 
 
 MISCONCEPTIONS = (
@@ -700,15 +783,15 @@ MISCONCEPTIONS = (
         "R'_i = Q'_{p(i)}^{-1} Q'_i = Q_{p(i)}^{-1} D Q_{p(i)} R_i. Your rotations are right "
         "once read as D R_i: the world turn multiplied onto the local one (R_i ← D R_i, at "
         "the end or inside the loop).",
-        symptom=lambda got, *args: _world_turns_as_local(got, *args)
-        or _local_turns_in_loop(got, *args)),
+        symptom=_of_case(lambda got, case: _world_turns_as_local(got, case)
+                         or _local_turns_in_loop(got, case))),
     Misconception(
         "world_returned", "ik_local", "world orientations returned instead of local rotations",
         "You returned the joints' WORLD orientations Q_i; ik_local returns LOCAL rotations, "
         "each relative to its parent: R_0 = Q_0, R_i = Q_{p(i)}^{-1} Q_i. Yours are right once "
         "read back that way.",
-        symptom=_world_returned),
-    *pivot_mistakes("ik_local", {"wrong_joint": _wrong_joint}),
+        symptom=_of_case(_world_returned)),
+    *pivot_mistakes("ik_local", {"wrong_joint": _of_case(_wrong_joint)}),
     Misconception(
         "path_to_wrong", "ik_local", "the wrong path from your path_to, walked by ik_local",
         "ik_local turns the joints on path_to(parents, fixed, effector), and for these cases "
@@ -722,7 +805,7 @@ MISCONCEPTIONS = (
         "the foot's side (Q_p = Q_c R_c^{-1}, p_p = p_c - Q_p l_c) moves everything beyond it, "
         "joint 0 included, and the foot neither slides nor turns. Your pose was solved as if joint "
         "0 were held: the planted foot turned (or slid) with the leg.",
-        symptom=_joint0_held),
+        symptom=_of_case(_joint0_held)),
     Misconception(
         "copied", "retarget_rest", "the rotations copied unchanged",
         "You returned the source's local rotations as they are. They were made for the "
@@ -767,20 +850,21 @@ MISCONCEPTIONS = (
 
 
 def ik_picture(got, expected, args) -> Picture | None:
-    parents, offsets, quats, root, fixed, _, target, _ = args
+    case = IKCase(*args)
     q = np.asarray(got, dtype=float)
-    if q.shape != quats.shape or np.any(_norm(q) < 1e-9):
+    if q.shape != case.local_quats.shape or np.any(_norm(q) < 1e-9):
         return None
-    P0, _ = ref_fk(parents, offsets, quats, root)
+    P0, _ = case.fk(case.local_quats)
 
     def pose(r):
-        P, _ = ref_fk(parents, offsets, rot.quat_normalize(r), root)
-        return P + (P0[fixed] - P[fixed])
+        P, _ = case.fk(rot.quat_normalize(r))
+        return P + (P0[case.fixed] - P[case.fixed])
 
     return Picture("your pose and the reference's, the fixed joint kept in place (the "
-                   "reference is one right answer of many)", parents, pose(q), pose(expected),
-                   start=P0, points=(("target", np.atleast_2d(target)),
-                                     ("fixed joint", np.atleast_2d(P0[fixed]))))
+                   "reference is one right answer of many)", case.parents, pose(q),
+                   pose(expected), start=P0,
+                   points=(("target", np.atleast_2d(case.target)),
+                           ("fixed joint", np.atleast_2d(P0[case.fixed]))))
 
 
 def retarget_picture(got, expected, args) -> Picture | None:
