@@ -12,6 +12,14 @@ Instructors::
 Student code runs only in a separate, limited interpreter (:mod:`autograder.sandbox`); all
 comparisons and scores are computed here. An assignment is a spec module plus data
 (:mod:`autograder.spec`, :mod:`autograder.assignments`).
+
+Layers, lowest first: the judging core (:mod:`~autograder.judging` with the specs, checks,
+mistake catalogue, wire values, limits and :mod:`~autograder.results`), which starts no
+process and which :mod:`course.exercises` uses in the student's own kernel; the grading run
+(sandbox, runner); the views of a result (:mod:`~autograder.findings`, the report, figures,
+Gradescope's feedback, the class summary, the LMS exports), which import the results and never
+the reverse; the batch (:mod:`~autograder.batch`, grading, cluster, Gradescope's runner) and
+the command line on top. This package loads only the core until :func:`check` runs.
 """
 
 from __future__ import annotations
@@ -19,8 +27,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from .limits import DEFAULT_LIMITS, Limits
 from .results import Result
-from .sandbox import DEFAULT_LIMITS, Limits
 
 __all__ = ["Limits", "Result", "check"]
 
@@ -49,6 +57,7 @@ def check(assignment: str, submission: str | Path | None = None, *, seed: str | 
         this machine allows. ``"portable"`` is what Windows gets, and runs anywhere.
     """
     from .assignments import load
+    from .report import Report
     from .runner import default_submission, run, seed_from_env
     from .submission import printable
 
@@ -56,4 +65,4 @@ def check(assignment: str, submission: str | Path | None = None, *, seed: str | 
     path = Path(submission) if submission is not None else default_submission(spec)
     if not os.path.lexists(path):  # a link (even to nothing) is refused in the report
         raise ValueError(f"submission: {printable(path)} does not exist")
-    return run(spec, path, seed_from_env(seed), limits, isolation)
+    return Report.of(run(spec, path, seed_from_env(seed), limits, isolation))

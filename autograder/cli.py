@@ -13,6 +13,7 @@ from pathlib import Path
 from .assignments import KEYS, load
 from .grading import collect, grade
 from .lms import FILES as LMS_FILES
+from .report import text
 from .runner import default_submission, read_seed, run, seed_from_env
 from .sandbox import FLOOR, LEVELS, level_for, weaker_warning
 from .submission import printable
@@ -90,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"submission: {printable(path)} is a folder: give a .py or .ipynb "
                          "file")
         result = run(spec, path, seed, level=level)
-        print(result)
+        print(text(result))
         if level.rank > FLOOR.rank:  # a laptop: fine for one's own work, not for a class
             print(f"(Checked at isolation {level}: fine for your own code; a class is graded "
                   f"at {FLOOR} or stronger.)", file=sys.stderr)

@@ -4,7 +4,7 @@ The grading process reads every submission and sends each to the cluster as a ta
 its bytes and name (:class:`autograder.records.Job`), never a path: a worker needs no shared
 file system. The worker writes the files into a temporary folder of its own, grades them in
 its own sandbox (:mod:`autograder.sandbox`, the strongest level it reaches) and sends back the
-batch's record of the submission, plain data (:func:`autograder.records.record`); the
+batch's record of the submission, plain data (:func:`autograder.batch.record`); the
 grading process writes every output file.
 
 Before any work, each worker reports the isolation level it reached, and a worker weaker than
@@ -32,8 +32,10 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .records import Job, grader_failed, not_run, record
-from .sandbox import FLOOR, LEVELS, Isolation, Limits, probe
+from .batch import record
+from .limits import Limits
+from .records import Job, grader_failed, not_run
+from .sandbox import FLOOR, LEVELS, Isolation, probe
 
 if TYPE_CHECKING:
     from distributed import Client

@@ -5,7 +5,8 @@ z blue), the student's beside the expected one, with the world axes faint behind
 tree (a2's skeletons, a3's chains) is drawn twice, in 3D and seen from the front (x right,
 y up, as in BVH): yours solid, the expected one dashed, the pose the call started from faint,
 and the targets marked. matplotlib is imported only here, only when a report is drawn, and
-draws off screen (the Agg canvas), so it works headless and in a kernel alike.
+draws off screen (the Agg canvas), so it works headless and in a kernel alike; the class
+summary draws its charts with the same :func:`figure` and :func:`png`.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:  # hints only: results.py -> report.py -> (lazily) here
+if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from .results import CaseResult, Result, TestResult
@@ -62,20 +63,20 @@ def _finite(p: Picture) -> bool:
     return all(a is not None and np.all(np.isfinite(a)) for a in arrays)
 
 
-def _figure(size: tuple[float, float]) -> Figure:
+def figure(size: tuple[float, float]) -> Figure:
     from matplotlib.figure import Figure  # the Agg canvas: no display needed
 
     return Figure(figsize=size, dpi=80)
 
 
-def _png(fig: Figure) -> str:
+def png(fig: Figure) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", bbox_inches="tight")
     return base64.b64encode(buf.getvalue()).decode()
 
 
 def _triads_png(got: np.ndarray, want: np.ndarray) -> str:
-    fig = _figure((7, 3.4))
+    fig = figure((7, 3.4))
     for k, (R, title) in enumerate(((got, "yours"), (want, "expected"))):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
         for i, colour in enumerate(AXIS_COLOURS):
@@ -85,7 +86,7 @@ def _triads_png(got: np.ndarray, want: np.ndarray) -> str:
         ax.set(xlim=(-1, 1), ylim=(-1, 1), zlim=(-1, 1), xlabel="x", ylabel="y", zlabel="z",
                title=title)
         ax.set_box_aspect((1, 1, 1))
-    return _png(fig)
+    return png(fig)
 
 
 def _bones(
@@ -97,7 +98,7 @@ def _bones(
 
 def _trees_png(p: Picture) -> str:
     """3D view (y drawn up) and front view (x, y) of the trees and markers of ``p``."""
-    fig = _figure((8, 3.8))
+    fig = figure((8, 3.8))
     ax3 = fig.add_subplot(1, 2, 1, projection="3d")
     ax2 = fig.add_subplot(1, 2, 2)
     trees = [(p.yours, p.parents, YOURS, "-", 2.5, "yours"),
@@ -129,4 +130,4 @@ def _trees_png(p: Picture) -> str:
     ax3.set_box_aspect((1, 1, 1))
     ax2.set(aspect="equal", xlabel="x", ylabel="y", title="front view")
     ax2.legend(fontsize=7, loc="best", frameon=False)
-    return _png(fig)
+    return png(fig)

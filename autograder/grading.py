@@ -6,8 +6,8 @@ grading process only sends inputs, compares arrays and writes files (its judging
 interpreter lock, though: ``benchmarks/grading.py`` finds a ``--scheduler local:N`` cluster
 of N processes faster than N threads on a3). A submission that breaks anything only loses its
 own points; the batch always finishes. Each graded submission is kept as plain data
-(:func:`record`), which a cluster's worker sends back (:mod:`autograder.cluster`) and
-``--resume`` reads again.
+(:func:`autograder.batch.record`), which a cluster's worker sends back
+(:mod:`autograder.cluster`) and ``--resume`` reads again.
 
 File names, links and folders come from students too. Folders are searched without
 following links, to a bounded depth and number of entries; a link, pipe or device where a
@@ -28,18 +28,21 @@ import sys
 import time
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, replace
 from functools import cache
 from pathlib import Path
 from typing import Any, TextIO
 
+from .batch import record
+from .judging import prepare
+from .limits import DEFAULT_LIMITS, Limits
 from .lms import FILES as LMS_FILES
 from .lms import export
-from .records import Job, grader_failed, not_run, record
-from .report import create, write_csv
+from .output import create, write_csv
+from .records import Job, Submission, grader_failed, not_run
 from .results import Result
-from .runner import prepare, run
-from .sandbox import DEFAULT_LIMITS, FLOOR, Limits, level_for
+from .runner import run
+from .sandbox import FLOOR, level_for
 from .spec import Assignment
 from .submission import SubmissionError, printable, read_regular
 
@@ -54,19 +57,6 @@ MAX_STATE = 1 << 20  # bytes of a grading.json
 JUNK = frozenset({"__MACOSX", "__pycache__"})  # an archiver's or Python's, not the student's
 WINDOWS_DEVICES = frozenset({"CON", "PRN", "AUX", "NUL", *(f"COM{i}" for i in range(1, 10)),
                              *(f"LPT{i}" for i in range(1, 10))})
-
-
-@dataclass(frozen=True)
-class Submission:
-    """A submission: its name (its folder in the output), its file, and why it cannot be
-    graded if that was found while collecting (several candidate files, a search cut
-    short); then ``path`` is the student's folder. ``folder``: the student's folder it was
-    found in, if any (:mod:`autograder.lms` reads the platform's metadata there)."""
-
-    name: str
-    path: Path
-    refused: str = ""
-    folder: Path | None = None
 
 
 def collect(paths: list[Path], template: str) -> list[Submission]:

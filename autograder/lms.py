@@ -18,7 +18,7 @@ student's folder (a group submission gives each member a row), else the submissi
     Gradescope's roster and score layout: ``Name, SID, Email, Total Score, Max Points``.
 
 Every cell is a student's or platform's string, so each goes through
-:func:`autograder.report.csv_cell` (a spreadsheet formula is quoted), as in ``grades.csv``.
+:func:`autograder.output.csv_cell` (a spreadsheet formula is quoted), as in ``grades.csv``.
 """
 
 from __future__ import annotations
@@ -29,11 +29,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .report import bounded, write_csv
+from .findings import bounded
+from .output import write_csv
 from .submission import SubmissionError, printable, read_regular
 
 if TYPE_CHECKING:
-    from .grading import Submission
+    from .records import Submission
     from .spec import Assignment
 
 FILES = {"canvas": "grades-canvas.csv", "moodle": "grades-moodle.csv",

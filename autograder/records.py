@@ -1,20 +1,30 @@
-"""A graded submission as plain data: what the batch keeps of it, what a cluster task carries
-and what a worker sends back, so that the local pool, the cluster and ``--resume`` share one
-form (and :mod:`autograder.grading` and :mod:`autograder.cluster` need not import each other).
+"""A submission as plain data: as it was found, as a cluster task carries it, and the result
+of one that was not run, so that the local pool, the cluster, Gradescope's runner and the LMS
+exports share one form (and :mod:`autograder.grading` and :mod:`autograder.cluster` need not
+import each other). What the batch keeps of a graded one is :func:`autograder.batch.record`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-from .gradescope.feedback import results_json
-from .report import csv_header, csv_row
+from .judging import prepare
 from .results import Result, TestResult
-from .runner import prepare
 from .spec import Assignment
-from .summary import facts
+
+
+@dataclass(frozen=True)
+class Submission:
+    """A submission: its name (its folder in the output), its file, and why it cannot be
+    graded if that was found while collecting (several candidate files, a search cut
+    short); then ``path`` is the student's folder. ``folder``: the student's folder it was
+    found in, if any (:mod:`autograder.lms` reads the platform's metadata there)."""
+
+    name: str
+    path: Path
+    refused: str = ""
+    folder: Path | None = None
 
 
 @dataclass(frozen=True)
@@ -28,15 +38,6 @@ class Job:
     file: str
     files: dict[str, bytes]
     digest: str
-
-
-def record(name: str, result: Result, digest: str = "") -> dict[str, Any]:
-    """What the batch keeps of a graded submission, as plain data (a cluster's worker sends
-    it back): its ``results.json``, its row and header of ``grades.csv``, the facts the
-    class summary needs, and the digest of what was graded ("" for nothing to resume)."""
-    return {"results": results_json(result, f"Graded {result.submission.name}."),
-            "row": csv_row(name, result),
-            "header": csv_header(result), "facts": facts(name, result), "digest": digest}
 
 
 def grader_failed(assignment: Assignment, path: Path, seed: str | None, level: str,

@@ -1,9 +1,8 @@
 """What grading one submission found: per case, per test, per submission.
 
-Plain data with the scores derived from it; :mod:`autograder.runner` fills it in and
-:mod:`autograder.report` says it. ``str(result)`` is the text report and a notebook shows the
-HTML one, so this module uses the report's functions; the report and the figures use these
-classes for their type hints only, so nothing imports back here.
+Plain data with the scores derived from it: :mod:`autograder.runner` (or a notebook's
+self-check) fills it in; the views (the text and HTML report, Gradescope's results.json, the
+class summary, the CSV and LMS exports) import it and say it. It imports no view.
 """
 
 from __future__ import annotations
@@ -12,7 +11,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .report import html, text
 from .spec import Assignment, Case, Function, Misconception, Test
 
 
@@ -97,9 +95,3 @@ class Result:
     @property
     def bonus_score(self) -> float:
         return sum(t.score for t in self.tests if t.test.bonus)
-
-    def __str__(self) -> str:
-        return text(self)
-
-    def _repr_html_(self) -> str:
-        return html(self)

@@ -1,6 +1,7 @@
-"""Grade one submission: static check, sandboxed calls, validation, comparison, diagnosis.
+"""Grade one submission: static check, sandboxed calls, then each call judged
+(:mod:`autograder.judging`: validation, comparison, diagnosis).
 
-Everything that decides a score happens here, in the grading process, on plain arrays the
+Everything that decides a score happens in the grading process, on plain arrays the
 sandbox sent back; the submission only ever sees its inputs.
 """
 
@@ -10,46 +11,19 @@ import os
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .judging import Prepared, diagnose, error_text, judge, prepare
+from .limits import DEFAULT_LIMITS, Limits
 from .results import CaseResult, Result, TestResult
-from .sandbox import DEFAULT_LIMITS, Limits, Outcome, Sandbox, level_for
-from .spec import Assignment, Case, Function, Misconception, Rollout, Run, Test, case_rng
+from .sandbox import Sandbox, level_for
+from .spec import Assignment, Case, Function, Misconception, Rollout, Run
 from .submission import Source, SubmissionError, import_problems, read_regular, read_source
 
 ASSIGNMENTS_DIR = Path(__file__).resolve().parents[1] / "assignments"
-
-
-@dataclass(frozen=True)
-class Prepared:
-    """A test with its cases and the reference's answers (a rollout's: its :class:`Run`),
-    computed once per seed."""
-
-    test: Test
-    cases: tuple[Case, ...]
-    expected: tuple[Any, ...]
-
-
-@lru_cache(maxsize=16)
-def prepare(assignment: Assignment, seed: str | None) -> tuple[Prepared, ...]:
-    """The tests to run: all visible ones, and the hidden ones when there is a seed (a test
-    without cases here, such as one on data this machine lacks, is left out)."""
-    out = []
-    for test in assignment.tests:
-        if test.hidden and not seed:
-            continue
-        fn = assignment.function(test.function)
-        cases = tuple(test.cases(case_rng(test, seed)))
-        if cases:
-            expected = (fn.reference(*c.args) if test.rollout is None
-                        else test.rollout.run(fn.reference, c.args) for c in cases)
-            out.append(Prepared(test, cases, tuple(expected)))
-    return tuple(out)
 
 
 def default_submission(assignment: Assignment) -> Path:
@@ -97,7 +71,7 @@ def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared,
                  level=result.isolation) as sandbox:
         started = sandbox.start()
         if started.status != "ok":
-            why = (_error_text(started.error, source.locate) if started.status == "error"
+            why = (error_text(started.error, source.locate) if started.status == "error"
                    else started.message)
             result.problems = [f"your file could not be loaded: {why}"]
             _skip_all(result, "not run: the file could not be loaded (see above)")
@@ -136,42 +110,6 @@ def _numbers(x: Any) -> int:
     if isinstance(x, (tuple, list)):
         return sum(_numbers(i) for i in x)
     return int(np.size(x)) if isinstance(x, (np.ndarray, np.generic, int, float)) else 1
-
-
-def judge(fn: Function, case: Case, expected: Any, out: Outcome, memory_mb: int | None,
-          locate: Callable[[int], str], catalogue: tuple[Misconception, ...]) -> CaseResult:
-    """One case's verdict from what the call gave (``out``): validated, compared, an error
-    explained by the ``catalogue`` if it can be (public: the notebooks' self-checks,
-    :mod:`course.exercises`, judge their calls with it too)."""
-    if out.status == "ok":
-        assert out.value is not None
-        v = fn.check.validate(fn.name, out.value, expected)
-        if v.error:
-            return CaseResult(case, "invalid", v.error, v.array, expected)
-        why = fn.check.judge(v.array, expected, case.args)
-        if why is None:
-            return CaseResult(case, "pass", got=v.array, expected=expected)
-        digits = fn.check.decimals(v.array, expected)
-        return CaseResult(case, "wrong", f"{fn.name} returned "
-                          f"{fn.check.show_value(v.array, digits)}, expected "
-                          f"{fn.check.show_expected(expected, digits)}: {why}", v.array, expected)
-    if out.status == "error":
-        if out.error.get("type") == "NotImplementedError":
-            return CaseResult(case, "not_implemented", "not implemented yet", None, expected)
-        text = _error_text(out.error, locate)
-        if out.error.get("type") == "MemoryError" and memory_mb is not None:
-            text += f" (the memory limit is {memory_mb} MB)"
-        for m in catalogue:
-            hint = _explained(m, out.error, case)
-            if hint:
-                text += f": {hint}"
-                break
-        return CaseResult(case, "error", f"{fn.name} raised {text}", None, expected,
-                          error=out.error)
-    message = out.message
-    if out.status == "timeout" and fn.timeout_hint:
-        message = f"{message}: {fn.timeout_hint}"
-    return CaseResult(case, out.status, message, None, expected)
 
 
 def roll(fn: Function, rollout: Rollout, case: Case, expected: Run, sandbox: Sandbox,
@@ -216,26 +154,6 @@ def roll(fn: Function, rollout: Rollout, case: Case, expected: Run, sandbox: San
     return CaseResult(case, "wrong", why, run.answers[-1], last), first_wrong
 
 
-def _explained(m: Misconception, error: dict[str, Any], case: Case) -> str | None:
-    """What ``m`` says about the error a case raised, if it explains it."""
-    if m.explains is None:
-        return None
-    try:
-        return m.explains(error, *case.args)
-    except Exception:  # an explanation undefined on this input explains nothing
-        return None
-
-
-def _error_text(error: dict[str, Any], locate: Callable[[int], str]) -> str:
-    text: str = error.get("type", "Exception")
-    if error.get("message"):
-        text += f": {error['message']}"
-    where = error.get("where")
-    if where:
-        text += f" ({locate(where['line'])}: {where['code'].strip()})"
-    return text
-
-
 def _callee_mistake(assignment: Assignment, fn: Function, cases: list[CaseResult],
                     sandbox: Sandbox) -> Misconception | None:
     """The catalogued mistake ``caused_by`` a function ``fn`` uses, if the student's own
@@ -261,40 +179,6 @@ def _callee_mistake(assignment: Assignment, fn: Function, cases: list[CaseResult
             if v.error or callee.check.judge(v.array, expected, a) is not None:
                 return mistake
     return None
-
-
-def diagnose(assignment: Assignment, fn: Function,
-             cases: list[CaseResult]) -> Misconception | None:
-    """The first catalogued mistake that reproduces (or shows the symptom of) every failing
-    case of a test, if any.
-
-    Only outputs of the right shape can be compared, and errors only by a mistake that
-    explains them; a test with a timeout or a wrong shape among its failures gets no
-    diagnosis.
-    """
-    failing = [c for c in cases if not c.passed]
-    if not failing or any(c.got is None and c.error is None for c in failing):
-        return None
-    for m in assignment.misconceptions_of(fn.name):
-        if all(_reproduces(m, fn, c) for c in failing):
-            return m
-    return None
-
-
-def _reproduces(m: Misconception, fn: Function, c: CaseResult) -> bool:
-    if m.caused_by is not None:  # found by calling the callee (_callee_mistake), not here
-        return False
-    if c.got is None:
-        return c.error is not None and _explained(m, c.error, c.case) is not None
-    try:
-        with np.errstate(all="ignore"):
-            if m.symptom is not None:
-                return bool(m.symptom(c.got, *c.case.args))
-            assert m.wrong is not None  # Misconception holds one of wrong, symptom, caused_by
-            wrong = m.wrong(*c.case.args)
-    except Exception:  # a variant undefined on this input reproduces nothing
-        return False
-    return fn.check.close(c.got, wrong)
 
 
 def seed_from_env(seed: str | None) -> str | None:

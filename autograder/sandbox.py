@@ -60,7 +60,7 @@ import sys
 import tempfile
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cache
 from importlib.util import find_spec
 from pathlib import Path
@@ -69,6 +69,8 @@ from typing import IO, Any
 import numpy as np
 
 from . import jail, runtime, seccomp
+from .judging import Outcome
+from .limits import Limits
 from .protocol import (
     MAX_FRAME,
     ProtocolError,
@@ -137,44 +139,6 @@ ISOLATION_NOTES: dict[str, str] = {
                         "files, imports, sockets and processes out of reach, and each case "
                         "still has its time limit, but memory and CPU time are not limited.)",
 }
-
-
-@dataclass(frozen=True)
-class Limits:
-    """Resource limits for one submission.
-
-    ``case_timeout`` is the wall-clock time one case may take and ``budget`` the wall-clock
-    time of the whole submission (loading and every case; what is left when it runs out
-    scores 0). ``cpu_seconds`` is the CPU time one interpreter may use over its whole life, a
-    backstop for work the deadlines do not see (threads); None sizes it for every case to
-    use its ``case_timeout``. ``memory_mb`` bounds the submission's address space (one
-    process at the bubblewrap level, where it can start no other), ``disk_mb`` its writable
-    tmpfs (bubblewrap) or any one file it writes (below). The ``"portable"`` level keeps the
-    wall-clock limits only.
-    """
-
-    cpu_seconds: float | None = None
-    memory_mb: int = 1024
-    load_timeout: float = 10.0  # wall seconds to start and import the submission
-    case_timeout: float = 2.0  # wall seconds per case
-    budget: float = 120.0  # wall seconds for the whole submission
-    disk_mb: int = 16
-    max_fatal: int = 2  # cases of one test that may stop the interpreter before the rest skip
-
-
-DEFAULT_LIMITS = Limits()
-
-
-@dataclass
-class Outcome:
-    """What became of one case: ``status`` is ``ok`` (``value`` holds the return value),
-    ``error`` (the function raised; ``error`` has type, message, line), or a fatal
-    ``timeout``, ``crash`` or ``garbage`` (``message`` says what happened), or ``skipped``."""
-
-    status: str
-    value: Value | None = None
-    error: dict[str, Any] = field(default_factory=dict)
-    message: str = ""
 
 
 @dataclass

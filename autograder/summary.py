@@ -18,8 +18,8 @@ import html
 from collections import Counter
 from typing import TYPE_CHECKING, Any
 
-from .figures import _figure, _png
-from .report import _scored, bounded, describe_args
+from .figures import figure, png
+from .findings import bounded, describe_args, scored
 
 if TYPE_CHECKING:
     from .results import Result, TestResult
@@ -35,7 +35,7 @@ def facts(name: str, result: Result) -> dict[str, Any]:
     """What the summary needs of one graded submission, as plain data."""
     own = {name, result.submission.name, result.submission.stem, str(result.submission)}
     mistakes: dict[str, dict[str, str]] = {}  # each once, as the first test showing it has it
-    for t in _scored(result):
+    for t in scored(result):
         if t.misconception:
             key = f"{t.test.function}:{t.misconception.key}"
             mistakes.setdefault(key, {"key": key, "title": t.misconception.title,
@@ -45,7 +45,7 @@ def facts(name: str, result: Result) -> dict[str, Any]:
         "score": round(result.score, 4),
         "max_score": result.max_score,
         "refused": bounded(" ".join("; ".join(result.problems).split()), MAX_REASON),
-        "tests": {t.test.name: t.status for t in _scored(result)},
+        "tests": {t.test.name: t.status for t in scored(result)},
         "mistakes": list(mistakes.values()),
     }
 
@@ -127,7 +127,7 @@ def _img(png: str, alt: str) -> str:
 
 
 def _histogram_png(scores: list[float], maximum: float) -> str:
-    fig = _figure((6, 2.6))
+    fig = figure((6, 2.6))
     ax = fig.add_subplot()
     top = max([maximum, *scores, 1.0])
     ax.hist(scores, bins=min(20, max(5, int(top) * 2)), range=(0, top), color="#1f6fd1",
@@ -136,12 +136,12 @@ def _histogram_png(scores: list[float], maximum: float) -> str:
     ax.set_ylabel("submissions")
     # The default AutoLocator is a MaxNLocator, which takes integer=; Locator's stub does not.
     ax.yaxis.get_major_locator().set_params(integer=True)  # type: ignore[call-arg]  # counts
-    return _png(fig)
+    return png(fig)
 
 
 def _bars_png(bars: list[tuple[str, int]], total: int, label: str) -> str:
     """Horizontal bars, the first on top, of counts out of ``total``."""
-    fig = _figure((6, 0.8 + 0.3 * len(bars)))
+    fig = figure((6, 0.8 + 0.3 * len(bars)))
     ax = fig.add_subplot()
     names = [bounded(name, 40) for name, _ in bars][::-1]
     ax.barh(range(len(bars)), [c for _, c in bars][::-1], color="#1a7f37")
@@ -149,4 +149,4 @@ def _bars_png(bars: list[tuple[str, int]], total: int, label: str) -> str:
     ax.set_xlim(0, max(total, 1))
     ax.set_xlabel(f"{label} (of {total})")
     ax.xaxis.get_major_locator().set_params(integer=True)  # type: ignore[call-arg]  # as above
-    return _png(fig)
+    return png(fig)

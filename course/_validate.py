@@ -85,6 +85,15 @@ def _index(mask: NDArray[np.bool_]) -> str:
     return f" at index {tuple(int(i) for i in np.argwhere(mask)[0])}"
 
 
+def as_time_step(h: float) -> float:
+    """A simulation's time step ``h`` as a float; a ValueError unless a positive finite
+    number."""
+    scalar: bool = np.isscalar(h)  # kept a bool: numpy's TypeGuard would widen h's type
+    if not scalar or not np.isfinite(h) or h <= 0:
+        raise ValueError(f"h: the time step must be a positive finite number, got {h!r}")
+    return float(h)
+
+
 def broadcast_leading(where: str, *args: tuple[str, Array, int]) -> tuple[int, ...]:
     """The broadcast of the arguments' leading shapes, each without its trailing axes.
 

@@ -19,6 +19,10 @@ a joint's rotation channels compose *intrinsically* in file order, so ``Zrotatio
 Xrotation`` is the Euler order ``"ZYX"``, :math:`R = R_Z(\alpha) R_Y(\beta) R_X(\gamma)`. A
 position channel replaces that axis of the joint's OFFSET (for the root: its position).
 
+The writer (:func:`save_bvh`, :func:`format_bvh`, :func:`format_bvh_channels`) is defined with
+:class:`~course.motion.Motion`, whose :meth:`~course.motion.Motion.save` uses it, and is
+exported here beside the reader.
+
 The reader accepts what real exporters write (CRLF or mixed line endings, tabs, blank lines,
 no final newline, ``.0083333``, leaf joints without End Site, ``Frame Time:`` spacing) and
 refuses anything else with a :class:`BVHError` naming the file, the line and the problem.
@@ -29,7 +33,7 @@ from __future__ import annotations
 import os
 import re
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -42,10 +46,12 @@ from .motion import (
     ROTATION_CHANNELS,
     Motion,
     euler_order,
-    is_end_site,
+    format_bvh,
+    format_bvh_channels,
     rotation_axes,
+    save_bvh,
 )
-from .rotations import euler_from_quat, quat_from_euler, quat_identity
+from .rotations import quat_from_euler, quat_identity
 from .skeleton import Ball, Fixed, Hinge, JointType, Skeleton, Universal
 
 __all__ = [
@@ -72,11 +78,6 @@ _NUMBER = re.compile(
 # Whole numbers: ASCII digits, at most 18 of them after leading zeros (more than any file
 # holds, and int() refuses strings past 4300 digits).
 _COUNT = re.compile(r"0*[0-9]{1,18}")
-# Tabs of indentation stop growing at this depth, so a deep chain is saved in linear size
-# (real skeletons are less than 20 deep and are written as they always were).
-_MAX_INDENT = 32
-# Components a rotation channel set cannot express are tolerated up to this (degrees).
-_DROPPED_ANGLE_TOL = 1e-6
 
 
 class BVHError(ValueError):
@@ -579,226 +580,3 @@ def _pose_from_channels(
         rotations[:, joints] = quat_from_euler(angles, order, degrees=True)
     root_positions = bones[:, 0].copy()
     return rotations, root_positions, bones if animated_bones else None
-
-
-# -- writing -------------------------------------------------------------------------------
-
-
-def save_bvh(
-    motion: Motion,
-    path: str | os.PathLike[str],
-    orders: str | Mapping[str, str] | None = None,
-    *,
-    digits: int = 12,
-) -> None:
-    """Write ``motion`` as a BVH file (LF line endings, tabs); see :func:`format_bvh`."""
-    Path(path).write_text(format_bvh(motion, orders, digits=digits), encoding="utf-8", newline="\n")
-
-
-def format_bvh(
-    motion: Motion, orders: str | Mapping[str, str] | None = None, *, digits: int = 12
-) -> str:
-    """The text of a BVH file holding ``motion``.
-
-    Parameters
-    ----------
-    motion : Motion
-    orders : str or mapping of joint name to str, optional
-        Intrinsic Euler orders for the rotation channels (``"ZYX"`` writes ``Zrotation
-        Yrotation Xrotation``): one order for every joint that has rotation channels, or a
-        mapping for some joints. Default: each joint's channels as in ``motion.channels``.
-    digits : int
-        Significant digits per value; the default 12 keeps forward kinematics within 1e-9 of
-        the motion for clip-sized numbers.
-
-    Raises
-    ------
-    ValueError
-        If ``orders`` is not an intrinsic Tait-Bryan order (or names an unknown joint), or the
-        motion holds something its channels cannot carry (a rotation of a joint without
-        rotation channels, a bone that differs from its OFFSET without position channels).
-
-    Notes
-    -----
-    Joints are written depth first; for a skeleton not already in that order, the file (and a
-    motion loaded from it) lists the joints in a different order, with the same names.
-    """
-    if not isinstance(digits, int) or not 1 <= digits <= 17:
-        raise ValueError(f"digits: expected an integer from 1 to 17, got {digits!r}")
-    channels = _channels_with_orders(motion, orders)
-    columns = [_joint_values(motion, j, c) for j, c in enumerate(channels)]
-    order = _depth_first(motion.skeleton)
-    values = np.concatenate([columns[j] for j in order], axis=1)
-    return format_bvh_channels(
-        motion.skeleton, channels, values, motion.frame_time, fmt=f"%.{digits}g", order=order
-    )
-
-
-def format_bvh_channels(
-    skeleton: Skeleton,
-    channels: Sequence[Sequence[str]],
-    values: Array,
-    frame_time: float,
-    *,
-    fmt: str = "%.12g",
-    order: Sequence[int] | None = None,
-) -> str:
-    """The text of a BVH file from raw channel values (degrees and file units).
-
-    Parameters
-    ----------
-    skeleton : Skeleton
-        One root; leaves named ``"<Parent>_end"`` without channels are written as End Sites.
-    channels : sequence of tuple of str
-        Per joint, its channel names.
-    values : array_like, shape (F, C)
-        Channel values per frame, joints in depth-first order (``order``).
-    frame_time : float
-        Seconds per frame.
-    fmt : str
-        printf format of a number (offsets and channel values).
-    order : sequence of int, optional
-        The depth-first joint order of the file (computed when not given).
-    """
-    order = list(_depth_first(skeleton) if order is None else order)
-    values = np.asarray(values, dtype=np.float64)
-    n_channels = sum(len(channels[j]) for j in order)
-    if values.ndim != 2 or values.shape[1] != n_channels:
-        raise ValueError(f"values: expected shape (F, {n_channels}), got {values.shape}")
-    depth: dict[int, int] = {}
-    lines = ["HIERARCHY"]
-    open_blocks: list[int] = []
-    for j in order:
-        parent = int(skeleton.parents[j])
-        while open_blocks and open_blocks[-1] != parent:  # close finished subtrees
-            lines.append("\t" * depth[open_blocks.pop()] + "}")
-        depth[j] = min(depth[parent] + 1, _MAX_INDENT) if parent >= 0 else 0
-        tab = "\t" * depth[j]
-        end_site = is_end_site(skeleton, j) and not channels[j]
-        head = "ROOT " if parent < 0 else "End Site" if end_site else "JOINT "
-        lines.append(tab + head + ("" if end_site else skeleton.names[j]))
-        lines.append(tab + "{")
-        lines.append(tab + "\tOFFSET " + " ".join(fmt % v for v in skeleton.offsets[j]))
-        if not end_site:
-            lines.append(tab + f"\tCHANNELS {len(channels[j])} " + " ".join(channels[j]))
-        open_blocks.append(j)
-    while open_blocks:
-        lines.append("\t" * depth[open_blocks.pop()] + "}")
-    lines += ["MOTION", f"Frames: {values.shape[0]}", f"Frame Time: {float(frame_time)!r}"]
-    row = " ".join([fmt] * n_channels)
-    lines.extend(row % tuple(frame) for frame in values.tolist())
-    return "\n".join(lines) + "\n"
-
-
-def _depth_first(skeleton: Skeleton) -> list[int]:
-    """Joint indices in depth-first (BVH file) order from the root, joint 0; children in index
-    order."""
-    order, todo = [], [0]
-    while todo:
-        j = todo.pop()
-        order.append(j)
-        todo.extend(reversed(skeleton.children(j)))
-    return order
-
-
-def _channels_with_orders(
-    motion: Motion, orders: str | Mapping[str, str] | None
-) -> tuple[tuple[str, ...], ...]:
-    """``motion.channels`` with the rotation channels of the joints in ``orders`` replaced."""
-    names = motion.skeleton.names
-    if orders is None:
-        return motion.channels
-    if isinstance(orders, str):
-        wanted = {names[j]: orders for j, c in enumerate(motion.channels) if rotation_axes(c)}
-    elif isinstance(orders, Mapping):
-        wanted = dict(orders)
-        unknown = sorted(set(wanted) - set(names))
-        if unknown:
-            raise ValueError(f"orders: no joint named {', '.join(map(repr, unknown))}")
-    else:
-        raise ValueError(f"orders: expected a string or a mapping, got {type(orders).__name__}")
-    for name, order in wanted.items():
-        if not isinstance(order, str) or len(order) != 3 or set(order) != set("XYZ"):
-            hint = (
-                " (BVH rotation channels are intrinsic: use uppercase, e.g. 'ZYX' for extrinsic"
-                " 'xyz')"
-                if isinstance(order, str) and set(order) == set("xyz")
-                else ""
-            )
-            raise ValueError(
-                f"orders: {order!r} for joint {name!r} is not an intrinsic order of the three "
-                f"axes X, Y, Z{hint}"
-            )
-    channels = []
-    for name, joint_channels in zip(names, motion.channels, strict=True):
-        if name not in wanted:
-            channels.append(joint_channels)
-            continue
-        rotations = tuple(f"{axis}rotation" for axis in wanted[name])
-        kept = [c for c in joint_channels if c in POSITION_CHANNELS]
-        # The rotations go where they were (before or after the positions).
-        first = next((i for i, c in enumerate(joint_channels) if c in ROTATION_CHANNELS), None)
-        at = len(kept) if first is None else first
-        channels.append(tuple(kept[:at]) + rotations + tuple(kept[at:]))
-    return tuple(channels)
-
-
-def _joint_values(motion: Motion, j: int, channels: tuple[str, ...]) -> Array:
-    """Joint ``j``'s channel values (F, len(channels)): degrees and file units."""
-    name = motion.skeleton.names[j]
-    rotation = motion.local_rotations[:, j]
-    order = euler_order(channels)
-    if order is None:
-        if np.any(1.0 - np.abs(rotation[:, 0]) > 1e-12):
-            raise ValueError(
-                f"motion: joint {name!r} rotates but has no rotation channels; give it some "
-                "with orders={" + repr(name) + ": 'ZYX'}"
-            )
-        angles = np.zeros((motion.n_frames, 3))
-    else:
-        angles = euler_from_quat(rotation, order, degrees=True)
-        n_axes = len(rotation_axes(channels))
-        if n_axes < 3:
-            # Every rotation has a second Tait-Bryan triple, (a + 180, 180 - b, c + 180); a
-            # joint with two channels turned more than 90 degrees about its second axis needs
-            # that one, where the padded third angle is 0 instead of 180.
-            other = _wrap_degrees(angles + [180.0, 0.0, 180.0])
-            other[:, 1] = _wrap_degrees(180.0 - angles[:, 1])
-            flip = np.abs(angles[:, n_axes:]).max(axis=1) > np.abs(other[:, n_axes:]).max(axis=1)
-            angles[flip] = other[flip]
-        dropped = np.abs(angles[:, n_axes:])
-        if dropped.size and dropped.max() > _DROPPED_ANGLE_TOL:
-            raise ValueError(
-                f"motion: joint {name!r} rotates about axes its channels {channels} do not "
-                f"have ({dropped.max():.3g} degrees); pass orders to write all three"
-            )
-    if j == 0:
-        bones = motion.root_positions
-    elif motion.translations is not None:
-        bones = motion.translations[:, j]
-    else:
-        bones = np.broadcast_to(motion.skeleton.offsets[j], (motion.n_frames, 3))
-    offset = motion.skeleton.offsets[j]
-    for axis in range(3):
-        if f"{'XYZ'[axis]}position" not in channels and not np.allclose(
-            bones[:, axis], offset[axis], rtol=1e-12, atol=1e-9
-        ):
-            what = "root position" if j == 0 else "bone (translations)"
-            raise ValueError(
-                f"motion: the {what} of joint {name!r} moves along {'XYZ'[axis]} but the joint "
-                f"has no {'XYZ'[axis]}position channel"
-            )
-    columns = []
-    axes = order or ""
-    for channel in channels:
-        axis = "XYZ".index(channel[0])
-        if channel in POSITION_CHANNELS:
-            columns.append(bones[:, axis])
-        else:
-            columns.append(angles[:, axes.index(channel[0])])
-    return np.stack(columns, axis=1) if columns else np.zeros((motion.n_frames, 0))
-
-
-def _wrap_degrees(angles: Array) -> Array:
-    """Angles wrapped into [-180, 180)."""
-    return (np.asarray(angles) + 180.0) % 360.0 - 180.0

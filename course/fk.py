@@ -310,7 +310,7 @@ class _ArrayWalk(_Walk[Array]):
         # NaN fails both comparisons, so this also rejects NaN.
         if s.size and not (s.max() <= 1.0 + UNIT_TOL and s.min() >= 1.0 - UNIT_TOL):
             bad = self.R[:, j : j + 1].reshape(self.batch + (1, 4))
-            _check_unit(bad, "local_rotations", self.names, joint=j)
+            check_unit(bad, "local_rotations", self.names, joint=j)
         return r
 
     def _bone(self, j: int) -> Array | tuple[float, float, float]:
@@ -368,7 +368,7 @@ class _ArrayWalk(_Walk[Array]):
 
 
 # --------------------------------------------------------------------------- public API
-def _check_unit(
+def check_unit(
     q: Array, name: str, names: Sequence[str] | None = None, joint: int = 0
 ) -> None:
     """Raise a ValueError naming the first entry of ``q (..., J, 4)`` that is not unit.
@@ -484,14 +484,14 @@ def forward_kinematics(
     q0 = None
     if root_orientation is not None:
         q0 = as_array(root_orientation, "root_orientation", (4,))
-        _check_unit(q0[..., None, :], "root_orientation", names, joint=root)
+        check_unit(q0[..., None, :], "root_orientation", names, joint=root)
 
     args = [("local_rotations", R, 2), ("root_position", p0, 1), ("offsets", L, 2)]
     broadcast_leading(
         "forward_kinematics", *args, *([] if q0 is None else [("root_orientation", q0, 1)])
     )
     if np.prod(np.broadcast_shapes(R.shape[:-2], p0.shape[:-1], L.shape[:-2])) <= FLOAT_FRAMES:
-        _check_unit(R, "local_rotations", names)
+        check_unit(R, "local_rotations", names)
     return forward_kernel(par, L, R, p0, root=root, root_orientation=q0, names=names)
 
 
@@ -578,6 +578,6 @@ def local_from_global(
     if Q is None or Q.ndim < 2 or Q.shape[-2:] != (len(par), 4):
         got = None if Q is None else Q.shape
         raise ValueError(f"orientations: expected shape (..., {len(par)}, 4), got {got}")
-    _check_unit(Q, "orientations", names)
+    check_unit(Q, "orientations", names)
     inv_parent = Q[..., par[1:], :] * np.array([1.0, -1.0, -1.0, -1.0])
     return np.concatenate([Q[..., :1, :], _kernels.quat_mul(inv_parent, Q[..., 1:, :])], axis=-2)

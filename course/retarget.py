@@ -52,7 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 from . import fk
 from ._typing import Array
 from ._validate import as_array
-from .fk import _check_unit, check_parents
+from .fk import check_parents, check_unit
 from .motion import Motion, default_channels
 from .rotations import (
     _kernels,
@@ -327,7 +327,7 @@ def retarget_rest(
     R = as_array(local_quats, "local_quats", (4,))
     if R.ndim < 2 or R.shape[-2] != len(p):
         raise ValueError(f"local_quats: expected shape (..., {len(p)}, 4), got {R.shape}")
-    _check_unit(R, "local_quats")
+    check_unit(R, "local_quats")
     m = np.arange(len(names))
     C = _corrections(source, target, m)
     return _retarget_rotations(target.parents, m, C, _globals(source.parents, R))

@@ -177,8 +177,7 @@ def test_another_minimiser_as_low_is_accepted():
 
 
 def test_a_timeout_of_the_step_names_the_likely_cause():
-    from autograder.runner import judge
-    from autograder.sandbox import Outcome
+    from autograder.judging import Outcome, judge
 
     fn = A5.function("implicit_euler_step")
     case = visible_cases(A5, "implicit_euler_step")[0]

@@ -18,8 +18,9 @@ from test_autograder_fixtures import FIXTURES, REPO
 
 from autograder.assignments import load
 from autograder.cli import main
+from autograder.findings import MAX_LINE
 from autograder.grading import MAX_DEPTH, Submission, collect, grade, safe_name, unique
-from autograder.report import MAX_LINE, csv_cell
+from autograder.output import csv_cell
 from autograder.sandbox import Outcome, Sandbox
 from autograder.submission import SubmissionError, import_problems, source_from_notebook
 

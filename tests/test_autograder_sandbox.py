@@ -23,6 +23,8 @@ from autograder import Limits, check
 from autograder.checks import Check, QuatCheck, StringsCheck, TupleCheck
 from autograder.child import make_hook
 from autograder.cli import main
+from autograder.findings import describe_args
+from autograder.judging import judge, prepare
 from autograder.protocol import (
     ProtocolError,
     decode_value,
@@ -30,8 +32,6 @@ from autograder.protocol import (
     read_frame,
     write_frame,
 )
-from autograder.report import describe_args
-from autograder.runner import judge, prepare
 from autograder.sandbox import (
     INSIDE,
     SANDBOX_UID,

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from course.exercises import check, exercise, exercises, hint, quiz, reference
-from course.exercises.check import NOTEBOOKS
+from course.exercises.registry import NOTEBOOKS
 
 REPO = Path(__file__).resolve().parents[1]
 ALL = [f"{nb}.{e.key}" for nb in NOTEBOOKS for e in exercises(nb)]

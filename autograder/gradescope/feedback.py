@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from ..report import MAX_FIELD, _points, _scored, bounded, header, test_lines
+from ..findings import MAX_FIELD, bounded, header, points, scored, test_lines
 from ..results import Result, TestResult
 from ..spec import Misconception
 
@@ -56,7 +56,7 @@ def summary(result: Result, graded: str) -> str:
     said = [line for line in header(result)[1:] if line]
     if said:
         parts.append(code_block(said))
-    shown = [t for t in _scored(result) if not t.test.hidden]
+    shown = [t for t in scored(result) if not t.test.hidden]
     found: dict[tuple[str, str], tuple[Misconception, list[str]]] = {}
     for t in shown:
         if t.misconception and t.status != "passed":
@@ -71,10 +71,10 @@ def summary(result: Result, graded: str) -> str:
         parts.append("No known mistake matches the failing tests: see each test below.")
     visible = sum(t.score for t in shown)
     most = sum(t.test.points for t in shown if not t.test.bonus)
-    hidden = [t for t in _scored(result) if t.test.hidden]
-    line = f"Visible tests: {_points(visible)} / {_points(most)} points."
+    hidden = [t for t in scored(result) if t.test.hidden]
+    line = f"Visible tests: {points(visible)} / {points(most)} points."
     if hidden:
-        line += (f" {len(hidden)} hidden tests ({_points(sum(t.test.points for t in hidden))}"
+        line += (f" {len(hidden)} hidden tests ({points(sum(t.test.points for t in hidden))}"
                  " points) are shown when your instructor publishes the grades.")
     parts.append(line)
     return bounded("\n\n".join(parts), MAX_FIELD)
@@ -96,7 +96,7 @@ def results_json(result: Result, graded: str, extra: dict[str, Any] | None = Non
         # Gradescope documents no per-test time: it is kept with the test's own data
         "extra_data": {"execution_time": round(t.elapsed, 3), "function": t.test.function,
                        "misconception": t.misconception.key if t.misconception else None},
-    } for t in _scored(result)]
+    } for t in scored(result)]
     return {
         "score": round(result.score, 4),
         "execution_time": round(result.elapsed, 3),

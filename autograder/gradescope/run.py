@@ -30,9 +30,10 @@ from typing import Any
 
 from ..assignments import load
 from ..grading import JUNK, MAX_DEPTH, MAX_ENTRIES, SUFFIXES
+from ..judging import prepare
+from ..output import create
 from ..records import not_run
-from ..report import create
-from ..runner import prepare, run
+from ..runner import run
 from ..sandbox import FLOOR, Isolation, level_for, weaker_warning
 from ..spec import Assignment
 from ..submission import SubmissionError, printable, read_regular

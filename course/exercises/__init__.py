@@ -16,14 +16,16 @@ with a few choices before an experiment and reveals the answer only once one is 
 
 Each notebook's exercises live in ``nbNN.py`` (``nb02`` for notebook 02), each with its
 reference solution, a function of ``course``; :func:`reference` returns it (the tests run
-every check against it). Nothing heavy is imported here: the autograder and ipywidgets load
-on first use.
+every check against it). Nothing heavy is imported here: the autograder's judging core and
+ipywidgets load on first use, and no part of its grading run (sandbox, processes) ever does.
 """
 
 from __future__ import annotations
 
-from .check import Exercise, Feedback, check, exercise, exercises, reference
+from .check import Feedback, check
 from .hints import hint
 from .quiz import quiz
+from .registry import exercise, exercises, reference
+from .spec import Exercise
 
 __all__ = ["Exercise", "Feedback", "check", "exercise", "exercises", "hint", "quiz", "reference"]

@@ -1,12 +1,14 @@
-"""Check a notebook exercise with the autograder's engine, in the student's own kernel.
+"""Check a notebook exercise with the autograder's judging core, in the student's own kernel.
 
-An exercise is an autograder :class:`~autograder.spec.Function` (its parameters, reference
-and :class:`~autograder.checks.Check`), a generator of visible cases, its own known mistakes
-and two hints. A notebook's exercises form one :class:`~autograder.spec.Assignment`, so the
-expected answers come from :func:`autograder.runner.prepare`, each call is judged by
-:func:`autograder.runner.judge` and a failing exercise is diagnosed by
-:func:`autograder.runner.diagnose` against its own mistakes and the shared catalogue
-(:mod:`autograder.catalogue`). No sandbox: the code is the student's, run by the student.
+An exercise (:class:`~course.exercises.spec.Exercise`) is an autograder
+:class:`~autograder.spec.Function` (its parameters, reference and
+:class:`~autograder.checks.Check`), a generator of visible cases, its own known mistakes and
+two hints. A notebook's exercises form one :class:`~autograder.spec.Assignment`, so the
+expected answers come from :func:`autograder.judging.prepare`, each call is judged by
+:func:`autograder.judging.judge` and a failing exercise is diagnosed by
+:func:`autograder.judging.diagnose` against its own mistakes and the shared catalogue
+(:mod:`autograder.catalogue`). No sandbox, no process: the code is the student's, run by the
+student, and none of the autograder's grading run (sandbox, runner, batch) is loaded.
 """
 
 from __future__ import annotations
@@ -15,7 +17,6 @@ import ast
 import copy
 import ctypes
 import html
-import importlib
 import inspect
 import io
 import textwrap
@@ -28,29 +29,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-if TYPE_CHECKING:  # the autograder loads on the first check, not with the notebook
+from .hints import hint
+from .registry import exercise, exercises
+
+if TYPE_CHECKING:  # the autograder's judging core loads on the first check, not with the notebook
     from autograder.results import CaseResult
     from autograder.spec import Assignment, Case, Function, Misconception
 
 _NOT_YET = "… {key}: not yet — write the body, then run this again"
 _PRINTED_CHARS = 4000  # of what the student's function prints, shown below the check
-
-#: The notebooks with exercises, by number (``nb02.py`` for ``"02"``).
-NOTEBOOKS = ("01", "02", "03", "04", "05", "06", "07", "08", "09", "10", "11", "12", "13", "14")
-
-
-@dataclass(frozen=True)
-class Exercise:
-    """One exercise: ``key`` (``"fk_step"``; the notebook's number makes ``"02.fk_step"``),
-    the ``function`` the student writes (its ``reference`` is the solution), its visible
-    ``cases(rng)``, its known ``mistakes`` and two hints: a nudge, then the formula."""
-
-    key: str
-    function: Function
-    cases: Callable[[np.random.Generator], Sequence[Case]]
-    hint: str
-    formula: str
-    mistakes: tuple[Misconception, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -77,47 +64,9 @@ class Feedback:
     def _ipython_display_(self) -> None:
         from IPython.display import display
 
-        from .hints import hint
-
         display({"text/plain": self.text, "text/html": self._repr_html_()}, raw=True)
         if not self.passed:
             display(hint(self.key))
-
-
-def exercises(notebook: str) -> tuple[Exercise, ...]:
-    """The exercises of notebook ``notebook`` (``"02"``), in the order they appear."""
-    if notebook not in NOTEBOOKS:
-        raise KeyError(f"notebook {notebook!r} has no exercises; these do: {', '.join(NOTEBOOKS)}")
-    module = importlib.import_module(f"course.exercises.nb{notebook}")
-    found: tuple[Exercise, ...] = module.EXERCISES
-    return found
-
-
-class UnknownExercise(KeyError):
-    """No exercise has that name (its message is shown as written, not quoted as a key)."""
-
-    def __str__(self) -> str:
-        return str(self.args[0])
-
-
-def exercise(key: str) -> Exercise:
-    """The exercise ``key``, ``"<notebook>.<name>"`` (``"02.fk_step"``)."""
-    if not isinstance(key, str):
-        raise TypeError(f"an exercise is named by a string such as '02.fk_step', "
-                        f"got {type(key).__name__}")
-    notebook, _, name = key.partition(".")
-    found = {e.key: e for e in exercises(notebook)} if notebook in NOTEBOOKS else {}
-    if name not in found:
-        known = (f"notebook {notebook} has {', '.join(f'{notebook}.{k}' for k in found)}"
-                 if found else "the exercises are " + ", ".join(
-                     f"{nb}.{e.key}" for nb in NOTEBOOKS for e in exercises(nb)))
-        raise UnknownExercise(f"no exercise {key!r}; {known}")
-    return found[name]
-
-
-def reference(key: str) -> Callable[..., Any]:
-    """The reference solution of exercise ``key`` (a function of ``course``)."""
-    return exercise(key).function.reference
 
 
 @cache
@@ -162,7 +111,7 @@ def check(key: str, student: Callable[..., Any]) -> Feedback:
     TypeError, UnknownExercise
         If ``key`` is not a string, or names no exercise (the message lists them).
     """
-    from autograder.runner import diagnose, judge, prepare
+    from autograder.judging import diagnose, judge, prepare
 
     ex = exercise(key)
     if not callable(student):
@@ -189,7 +138,7 @@ def check(key: str, student: Callable[..., Any]) -> Feedback:
 
 
 def _nowhere(line: int) -> str:
-    """Where an error happened, for :func:`~autograder.runner.judge`: the cell's line."""
+    """Where an error happened, for :func:`~autograder.judging.judge`: the cell's line."""
     return f"line {line}"
 
 
@@ -208,7 +157,8 @@ def _calls(student: Callable[..., Any], cases: Sequence[Case]) -> list[Any]:
     captured and shown afterwards, cut to :data:`_PRINTED_CHARS` (a print in a loop can
     write megabytes, more than a notebook cell can show). After a case that runs out of
     time the rest are skipped: each could take as long again."""
-    from autograder.sandbox import Limits, Outcome
+    from autograder.judging import Outcome
+    from autograder.limits import Limits
 
     limit = Limits().case_timeout  # the grader's limit: what is too slow here is too slow there
     printed = _Printed(_PRINTED_CHARS)
@@ -224,11 +174,11 @@ def _calls(student: Callable[..., Any], cases: Sequence[Case]) -> list[Any]:
 
 
 def _call(student: Callable[..., Any], args: tuple[Any, ...], limit: float) -> Any:
-    """The call as the runner's :class:`~autograder.sandbox.Outcome`: the returned value
+    """The call as the grader's :class:`~autograder.judging.Outcome`: the returned value
     through the sandbox's own encoding (so it is validated the same way), the error, or a
     ``timeout`` if it took longer than ``limit`` seconds."""
+    from autograder.judging import Outcome
     from autograder.protocol import decode_value, encode_value
-    from autograder.sandbox import Outcome
 
     args = copy.deepcopy(args)  # a function that edits its input in place
     timer = _TimeLimit(limit)

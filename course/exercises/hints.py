@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from .check import exercise
+from .registry import exercise
 
 
 def in_kernel() -> bool:

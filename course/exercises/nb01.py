@@ -9,7 +9,7 @@ from autograder.spec import Case, Function, Misconception
 
 from ..rotations import matrix_from_axis_angle, matrix_from_quat, quat_conjugate, quat_rotate
 from ._cases import unit_quat, vector
-from .check import Exercise
+from .spec import Exercise
 
 
 def compose(R_first: np.ndarray, R_second: np.ndarray) -> np.ndarray:

@@ -9,7 +9,7 @@ from autograder.spec import Case, Function, Misconception
 
 from ..rotations import quat_conjugate, quat_from_axis_angle, quat_identity, quat_mul, quat_rotate
 from ._cases import unit_quat, vector
-from .check import Exercise
+from .spec import Exercise
 
 
 def child_position(p_parent: np.ndarray, Q_parent: np.ndarray, l_i: np.ndarray) -> np.ndarray:

@@ -11,7 +11,7 @@ from autograder.spec import Case, Function, Misconception
 from ..motion import Motion
 from ..rotations import quat_from_axis_angle, quat_from_euler, quat_identity, quat_mul
 from ..skeleton import chain
-from .check import Exercise
+from .spec import Exercise
 
 
 def clip_timing(frame_time: float, n_frames: int) -> np.ndarray:

@@ -7,7 +7,7 @@ import numpy as np
 from autograder.checks import Check
 from autograder.spec import Case, Function, Misconception
 
-from .check import Exercise
+from .spec import Exercise
 
 
 def _cosine_rule(a: float, b: float, c: float) -> float:

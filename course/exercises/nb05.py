@@ -10,7 +10,7 @@ from autograder.spec import Case, Function, Misconception
 
 from ..rotations import quat_between
 from ._cases import vector
-from .check import Exercise
+from .spec import Exercise
 
 
 def ccd_rotation(r_i: np.ndarray, e: np.ndarray, t: np.ndarray) -> np.ndarray:

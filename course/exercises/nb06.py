@@ -7,7 +7,7 @@ import numpy as np
 from autograder.checks import PointsCheck
 from autograder.spec import Case, Function, Misconception
 
-from .check import Exercise
+from .spec import Exercise
 
 
 def _reach(P: np.ndarray, t: np.ndarray, d: np.ndarray, wrong_point: bool = False) -> np.ndarray:

@@ -9,7 +9,7 @@ from autograder.spec import Case, Function, Misconception
 
 from ..ik import chain_jacobian, dls_step
 from ._cases import vector
-from .check import Exercise
+from .spec import Exercise
 
 
 def jacobian_column(r_i: np.ndarray, a_i: np.ndarray, e: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ from autograder.spec import Case, Function, Misconception
 
 from ..rotations import quat_angle, quat_conjugate, quat_mul
 from ._cases import unit_quat
-from .check import Exercise
+from .spec import Exercise
 
 
 def iteration_stats(iterations: np.ndarray) -> np.ndarray:

@@ -11,7 +11,7 @@ from autograder.spec import Case, Function, Misconception
 from ..fk import tree_path
 from ..rotations import quat_conjugate, quat_from_axis_angle, quat_identity, quat_mul
 from ._cases import unit_quat
-from .check import Exercise
+from .spec import Exercise
 
 #: A small character: 0 hips, 1 spine, 2 head, 3 left arm, 4 left hand, 5 left leg,
 #: 6 left foot, 7 right leg, 8 right foot.

@@ -16,7 +16,7 @@ from ..rotations import (
     quat_mul,
 )
 from ._cases import unit_quat, vector
-from .check import Exercise
+from .spec import Exercise
 
 _Z = np.array([0.0, 0.0, 1.0])
 

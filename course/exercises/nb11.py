@@ -10,7 +10,7 @@ from autograder.spec import Case, Function, Misconception
 
 from ..keyframes import catmull_rom, hermite
 from ._cases import vector
-from .check import Exercise
+from .spec import Exercise
 
 
 def catmull_rom_tangent(p_prev: np.ndarray, p_next: np.ndarray, t_prev: float, t_i: float,

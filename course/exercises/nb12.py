@@ -10,7 +10,7 @@ from autograder.spec import Case, Function, Misconception
 
 from ..physics import SpringSystem, step
 from ._cases import vector
-from .check import Exercise
+from .spec import Exercise
 
 
 def spring_force(x_i: np.ndarray, x_j: np.ndarray, k: float, L: float) -> np.ndarray:

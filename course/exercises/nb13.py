@@ -12,7 +12,7 @@ from ..physics.rigid_body import angular_velocity, quat_euler_step
 from ..physics.rigid_body import point_torque as _point_torque
 from ..rotations import matrix_from_quat
 from ._cases import unit_quat, vector
-from .check import Exercise
+from .spec import Exercise
 
 
 def world_omega(R: np.ndarray, I0: np.ndarray, L: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ from autograder.spec import Case, Function, Misconception
 
 from ..rotations import quat_conjugate, quat_mul, rotvec_from_quat
 from ._cases import unit_quat, vector
-from .check import Exercise
+from .spec import Exercise
 
 
 def pd_torque(q: np.ndarray, q_bar: np.ndarray, omega: np.ndarray, kp: float,

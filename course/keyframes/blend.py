@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import rotations as rot
 from .._typing import BoolArray
 from ..motion import Motion
-from .motion import _check_same_skeleton
+from .motion import check_same_skeleton
 
 Array = NDArray[np.float64]
 
@@ -98,7 +98,7 @@ def concatenate(first: Motion, second: Motion, blend_frames: int = 0) -> Motion:
         ``F_A + F_B - n`` frames, on ``first``'s skeleton; frame ``F_A - n`` starts the
         transition.
     """
-    _check_same_skeleton(first, second, "second")
+    check_same_skeleton(first, second, "second")
     for name, clip in (("first", first), ("second", second)):
         if clip.translations is not None:
             raise ValueError(f"{name}: clips with animated bone vectors cannot be blended")

@@ -117,7 +117,7 @@ def segments(times: Array, t: Array) -> tuple[NDArray[np.intp], Array]:
     return i, (t - times[i]) / (times[i + 1] - times[i])
 
 
-def _column(x: Array, ndim: int) -> Array:
+def as_column(x: Array, ndim: int) -> Array:
     """``x`` (...) with trailing axes of 1 so that it broadcasts against ``ndim`` more axes."""
     return x.reshape(x.shape + (1,) * ndim)
 
@@ -148,9 +148,9 @@ def linear(keys: ArrayLike, times: ArrayLike, t: ArrayLike, *, derivative: int =
     c = keys.ndim - 1
     p0, p1 = keys[i], keys[i + 1]
     if derivative == 0:
-        return p0 + _column(u, c) * (p1 - p0)
+        return p0 + as_column(u, c) * (p1 - p0)
     if derivative == 1:
-        return (p1 - p0) / _column(times[i + 1] - times[i], c)
+        return (p1 - p0) / as_column(times[i + 1] - times[i], c)
     return np.zeros_like(p0)
 
 
@@ -161,7 +161,7 @@ def newton_coefficients(keys: ArrayLike, times: ArrayLike) -> Array:
     keys, times = check_keys(keys, times, min_keys=1)
     c: Array = keys.copy()
     for j in range(1, times.size):
-        dt = _column(times[j:] - times[:-j], keys.ndim - 1)
+        dt = as_column(times[j:] - times[:-j], keys.ndim - 1)
         c[j:] = (c[j:] - c[j - 1:-1]) / dt
     return c
 
@@ -184,7 +184,7 @@ def polynomial(keys: ArrayLike, times: ArrayLike, t: ArrayLike, *, derivative: i
     derivative = _check_derivative(derivative)
     t = check_t(t, times)
     c = newton_coefficients(keys, times)
-    x = _column(t, keys.ndim - 1)
+    x = as_column(t, keys.ndim - 1)
     p = np.broadcast_to(c[-1], x.shape[:t.ndim] + c.shape[1:]).copy()
     dp, d2p = np.zeros_like(p), np.zeros_like(p)
     for k in range(times.size - 2, -1, -1):  # p <- p (t - t_k) + c_k, and its derivatives
@@ -201,7 +201,7 @@ def _hermite_segments(p0: Array, p1: Array, d0: Array, d1: Array, u: Array, h: A
     """Cubic Hermite segments from end values ``p0, p1`` and end tangents ``d0, d1`` per unit
     ``u`` (i.e. already times the segment's length), with time derivatives over ``h``."""
     c = p0.ndim - u.ndim
-    u = _column(u, c)
+    u = as_column(u, c)
     if derivative == 0:
         basis = (2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2)
     elif derivative == 1:
@@ -209,7 +209,7 @@ def _hermite_segments(p0: Array, p1: Array, d0: Array, d1: Array, u: Array, h: A
     else:
         basis = (12 * u - 6, 6 * u - 4, -12 * u + 6, 6 * u - 2)
     value = basis[0] * p0 + basis[1] * d0 + basis[2] * p1 + basis[3] * d1
-    return value / _column(h, c) ** derivative if derivative else value
+    return value / as_column(h, c) ** derivative if derivative else value
 
 
 def hermite(keys: ArrayLike, tangents: ArrayLike, times: ArrayLike, t: ArrayLike, *,
@@ -236,7 +236,7 @@ def hermite(keys: ArrayLike, tangents: ArrayLike, times: ArrayLike, t: ArrayLike
     t = check_t(t, times)
     i, u = segments(times, t)
     h = times[i + 1] - times[i]
-    hc = _column(h, keys.ndim - 1)
+    hc = as_column(h, keys.ndim - 1)
     return _hermite_segments(keys[i], keys[i + 1], hc * tangents[i], hc * tangents[i + 1], u, h,
                              derivative)
 
@@ -273,11 +273,11 @@ def cubic_tangents(keys: ArrayLike, times: ArrayLike, start_tangent: ArrayLike |
     keys, times = check_keys(keys, times)
     n, c = times.size, keys.ndim - 1
     h = np.diff(times)
-    delta = np.diff(keys, axis=0) / _column(h, c)
+    delta = np.diff(keys, axis=0) / as_column(h, c)
     lower, diag, upper = np.zeros(n), np.zeros(n), np.zeros(n)
     rhs = np.zeros_like(keys)
     lower[1:-1], diag[1:-1], upper[1:-1] = h[1:], 2 * (h[:-1] + h[1:]), h[:-1]
-    rhs[1:-1] = 3 * (_column(h[1:], c) * delta[:-1] + _column(h[:-1], c) * delta[1:])
+    rhs[1:-1] = 3 * (as_column(h[1:], c) * delta[:-1] + as_column(h[:-1], c) * delta[1:])
     for end, tangent, row in (("start_tangent", start_tangent, 0),
                               ("end_tangent", end_tangent, -1)):
         if tangent is None:  # natural: 2 m_0 + m_1 = 3 delta_0 (mirrored at the end)
@@ -390,7 +390,7 @@ def catmull_rom(keys: ArrayLike, times: ArrayLike, t: ArrayLike, *, knots: str =
     derivative = _check_derivative(derivative)
     t = check_t(t, times)
     spacing = _knot_spacing(keys, times, knots)  # (K-1,) or (K-1, ...) without the point axis
-    ds = _column(spacing, keys.ndim - spacing.ndim)
+    ds = as_column(spacing, keys.ndim - spacing.ndim)
     delta = np.diff(keys, axis=0) / ds
     m = np.empty_like(keys)
     if knots == "centripetal":
@@ -438,7 +438,7 @@ def bezier(control_points: ArrayLike, s: ArrayLike, *, derivative: int = 0) -> A
     s = check_t(s, np.array([0.0, 1.0]), "s")
     for _ in range(derivative):  # b' is the degree-(n-1) curve of n (b_{i+1} - b_i)
         b = (b.shape[0] - 1) * np.diff(b, axis=0)
-    sc = _column(s, b.ndim - 1)
+    sc = as_column(s, b.ndim - 1)
     level = [np.broadcast_to(bi, sc.shape[:s.ndim] + b.shape[1:]) for bi in b]
     while len(level) > 1:
         level = [(1 - sc) * a + sc * c for a, c in zip(level[:-1], level[1:], strict=True)]

@@ -101,7 +101,7 @@ def joint_position_error(motion: Motion, reference: Motion, *,
     -------
     ndarray, shape (F,)
     """
-    _check_same_skeleton(motion, reference, "reference")
+    check_same_skeleton(motion, reference, "reference")
     if motion.n_frames != reference.n_frames:
         raise ValueError(
             f"reference: has {reference.n_frames} frames, motion has {motion.n_frames}"
@@ -112,7 +112,7 @@ def joint_position_error(motion: Motion, reference: Motion, *,
     return error
 
 
-def _check_same_skeleton(motion: Motion, other: Motion, name: str) -> None:
+def check_same_skeleton(motion: Motion, other: Motion, name: str) -> None:
     """A ``ValueError`` naming ``name`` unless ``other`` has ``motion``'s joint tree."""
     a, b = motion.skeleton, other.skeleton
     if a.names != b.names or not np.array_equal(a.parents, b.parents):

@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import rotations as rot
 from .._validate import as_quat
 from ..rotations._kernels import quat_mul as _mul
-from .curves import _column, check_keys, check_t, segments
+from .curves import as_column, check_keys, check_t, segments
 
 Array = NDArray[np.float64]
 _CONJUGATE = np.array([1.0, -1.0, -1.0, -1.0])  # times a unit quaternion: its inverse
@@ -149,7 +149,7 @@ def slerp_keys(q_keys: ArrayLike, times: ArrayLike, t: ArrayLike) -> Array:
     q, times = _unit_keys(q_keys, times)
     t = check_t(t, times)
     i, u = segments(times, t)
-    return _mul(q[i], _exp(_column(u, q.ndim - 1) * _segment_logs(q)[i]))
+    return _mul(q[i], _exp(as_column(u, q.ndim - 1) * _segment_logs(q)[i]))
 
 
 def squad_controls(q_keys: ArrayLike, times: ArrayLike) -> Array:
@@ -186,7 +186,7 @@ def squad_controls(q_keys: ArrayLike, times: ArrayLike) -> Array:
         after = quat_log(rot.quat_mul(inv, q[2:]))
         before = quat_log(rot.quat_mul(inv, q[:-2]))
         h = np.diff(times)
-        h0, h1 = _column(h[:-1], q.ndim - 1), _column(h[1:], q.ndim - 1)
+        h0, h1 = as_column(h[:-1], q.ndim - 1), as_column(h[1:], q.ndim - 1)
         s[1:-1] = rot.quat_mul(q[1:-1], quat_exp(-(h0 * after + h1 * before) / (2 * (h0 + h1))))
     return s
 
@@ -228,7 +228,7 @@ def squad(q_keys: ArrayLike, times: ArrayLike, t: ArrayLike) -> Array:
     t = check_t(t, times)
     s = squad_controls(q, times)
     i, u = segments(times, t)
-    uc = _column(u, q.ndim - 1)
+    uc = as_column(u, q.ndim - 1)
     along = _mul(q[i], _exp(uc * _segment_logs(q)[i]))  # slerp(q_i, q_i+1, u)
     inner = _mul(s[i], _exp(uc * _segment_logs(s)[i]))  # slerp(s_i, s_i+1, u)
     blend = _log(_mul(along * _CONJUGATE, inner))
@@ -256,7 +256,7 @@ def angular_velocity(q: ArrayLike, times: ArrayLike) -> Array:
     """
     q, times = _unit_keys(q, times, "q")
     step = rot.quat_mul(q[1:], rot.quat_conjugate(q[:-1]))
-    return rot.rotvec_from_quat(step) / _column(np.diff(times), q.ndim - 1)
+    return rot.rotvec_from_quat(step) / as_column(np.diff(times), q.ndim - 1)
 
 
 def angular_velocity_jump(q_of_t: Callable[[Array], Array], x: float, h: float = 1e-4) -> float:

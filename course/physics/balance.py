@@ -46,7 +46,7 @@ from .character import (
     Y_TO_Z_MATRIX,
     Character,
     Push,
-    _mujoco,
+    import_mujoco,
     motion_from_qpos,
     qpos_from_motion,
 )
@@ -170,7 +170,7 @@ def standing_pose(character: Character) -> Motion:
     Motion
         One frame, ``frame_time`` 1/60 s, named ``"standing"``.
     """
-    mujoco = _mujoco()
+    mujoco = import_mujoco()
     skel = character.skeleton
     feet = foot_chains(character)
     n = skel.n_joints
@@ -250,7 +250,7 @@ def _ancestors(skel: Any, j: int) -> list[int]:
 def com_jacobian(character: Character, model: Any, data: Any) -> Array:
     """Floating-base COM Jacobian ``J_c`` (3, nv), z-up: ``ċ = J_c q̇`` (``mj_jacSubtreeCom``
     of the root body; ``data`` must have had ``mj_forward`` or ``mj_step``)."""
-    mujoco = _mujoco()
+    mujoco = import_mujoco()
     jac = np.zeros((3, model.nv))
     mujoco.mj_jacSubtreeCom(model, data, jac, character.bodies[0])
     return jac
@@ -270,7 +270,7 @@ def _ancestor_dofs(character: Character, model: Any, body: int) -> Array:
 def stance_com_jacobian(character: Character, model: Any, data: Any, foot_body: int) -> Array:
     """COM Jacobian with ``foot_body`` held fixed, (3, nv), z-up (module docstring):
     ``J_c - J_c,root J_f,root^-1 J_f``; its root columns are zero."""
-    mujoco = _mujoco()
+    mujoco = import_mujoco()
     jc = com_jacobian(character, model, data)
     jp = np.zeros((3, model.nv))
     jr = np.zeros((3, model.nv))
@@ -396,7 +396,7 @@ def stand(
         raise ValueError(f"controller: {controller!r} is not one of {CONTROLLERS}")
     if not (duration > 0 and h > 0 and frame_time > 0):
         raise ValueError("duration, h and frame_time must be positive")
-    mujoco = _mujoco()
+    mujoco = import_mujoco()
     if pose is None:
         pose = standing_pose(character)
     if pose.skeleton.n_joints != character.skeleton.n_joints:

@@ -52,7 +52,9 @@ Y_TO_Z = np.array([_S, _S, 0.0, 0.0])
 Y_TO_Z_MATRIX = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
 
-def _mujoco() -> Any:
+def import_mujoco() -> Any:
+    """The ``mujoco`` module, imported on first use (``course.physics`` loads without it);
+    an ImportError that says how to install it."""
     try:
         import mujoco  # type: ignore[import-untyped]  # (no stubs shipped)
     except ImportError as exc:  # pragma: no cover - depends on the environment
@@ -153,7 +155,7 @@ class Character:
 
     def fresh_model(self) -> Any:
         """A new ``MjModel`` compiled from :attr:`xml` (safe to modify)."""
-        return _mujoco().MjModel.from_xml_string(self.xml)
+        return import_mujoco().MjModel.from_xml_string(self.xml)
 
 
 def _fmt(v: Array) -> str:
@@ -208,7 +210,7 @@ def build_model(
     """
     if density <= 0 or radius <= 0:
         raise ValueError("density and radius must be positive")
-    mujoco = _mujoco()
+    mujoco = import_mujoco()
     s = guess_scale(skeleton) if scale is None else float(scale)
     offsets = skeleton.offsets * s @ Y_TO_Z_MATRIX.T  # (J, 3), z-up meters
     end = [is_end_site(skeleton, j) for j in range(skeleton.n_joints)]
@@ -309,7 +311,7 @@ def qvel_from_motion(character: Character, motion: Motion) -> Array:
     Frame ``i`` gets ``(qpos[i+1] ⊖ qpos[i]) / frame_time`` (the last frame repeats the one
     before), computed by ``mj_differentiatePos`` (angular velocities in the joint's frame).
     """
-    mujoco = _mujoco()
+    mujoco = import_mujoco()
     qpos = qpos_from_motion(character, motion)
     qvel = np.zeros((motion.n_frames, character.model.nv))
     for i in range(motion.n_frames - 1):
@@ -323,7 +325,7 @@ def qvel_from_motion(character: Character, motion: Motion) -> Array:
 
 def set_state(character: Character, data: Any, motion: Motion, frame: int = 0) -> None:
     """Set ``data.qpos``/``data.qvel`` from frame ``frame`` of ``motion`` and run mj_forward."""
-    mujoco = _mujoco()
+    mujoco = import_mujoco()
     clip = motion[max(0, frame - 1) : frame + 2] if motion.n_frames > 1 else motion
     k = min(frame, 1) if motion.n_frames > 1 else 0
     data.qpos[:] = qpos_from_motion(character, clip)[k]
@@ -545,7 +547,7 @@ def track(
     -------
     TrackingResult
     """
-    mujoco = _mujoco()
+    mujoco = import_mujoco()
     if motion.skeleton.n_joints != character.skeleton.n_joints:
         raise ValueError("motion: its skeleton does not match the character's")
     n = motion.n_frames if n_frames is None else min(int(n_frames), motion.n_frames)
@@ -633,7 +635,7 @@ def track(
 def effective_inertia(character: Character, motion: Motion | None = None) -> Array:
     """Diagonal of the joint-space mass matrix for the actuated DOFs (kg m^2), shape (nv-6,),
     at frame 0 of ``motion`` (or the rest pose). ``sqrt(kp / I)`` is a joint's PD frequency."""
-    mujoco = _mujoco()
+    mujoco = import_mujoco()
     model = character.model
     data = mujoco.MjData(model)
     if motion is not None:

@@ -38,6 +38,8 @@ from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._validate import as_time_step
+
 if TYPE_CHECKING:
     from collections.abc import Callable
 
@@ -386,13 +388,6 @@ def _gradient(system: SpringSystem, x: Array, y: Array, h: float) -> Array:
     return g
 
 
-def _check_h(h: float) -> float:
-    scalar: bool = np.isscalar(h)  # kept a bool: numpy's TypeGuard would widen h's type
-    if not scalar or not np.isfinite(h) or h <= 0:
-        raise ValueError(f"h: the time step must be a positive finite number, got {h!r}")
-    return float(h)
-
-
 def _state(system: SpringSystem, x: ArrayLike, v: ArrayLike) -> tuple[Array, Array]:
     n = system.n_particles
     return _positions(x, n, "x"), _positions(v, n, "v")
@@ -562,7 +557,7 @@ def step(system: SpringSystem, x: ArrayLike, v: ArrayLike, h: float, method: Met
         raise ValueError(f"pd_fix: must be one of {PD_FIXES}, got {pd_fix!r}")
     if solver not in ("direct", "cg"):
         raise ValueError(f"solver: must be 'direct' or 'cg', got {solver!r}")
-    h = _check_h(h)
+    h = as_time_step(h)
     x, v = _state(system, x, v)
     if method == "implicit":
         if not tol > 0 or max_iter < 1:
@@ -672,7 +667,7 @@ def implicit_euler_objective(x_new: ArrayLike, x: ArrayLike, v: ArrayLike, masse
     """
     system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
     x, v = _state(system, x, v)
-    h = _check_h(h)
+    h = as_time_step(h)
     return _objective(system, _positions(x_new, system.n_particles, "x_new"),
                       _inertial_target(system, x, v, h), h)
 
@@ -688,7 +683,7 @@ def implicit_euler_gradient(x_new: ArrayLike, x: ArrayLike, v: ArrayLike, masses
     """
     system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
     x, v = _state(system, x, v)
-    h = _check_h(h)
+    h = as_time_step(h)
     return _gradient(system, _positions(x_new, system.n_particles, "x_new"),
                      _inertial_target(system, x, v, h), h)
 

@@ -47,11 +47,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import Array
-from .._validate import as_array, unit
+from .._validate import as_array, as_time_step, unit
 from ..rotations import _kernels
 from ..rotations.axis_angle import quat_from_rotvec
 from ..rotations.quaternion import matrix_from_quat, quat_from_matrix
-from .mass_spring import GRAVITY, _check_h
+from .mass_spring import GRAVITY
 
 Integrator = Literal["explicit", "symplectic"]
 INTEGRATORS: tuple[str, ...] = ("explicit", "symplectic")
@@ -393,7 +393,7 @@ def quat_euler_step(q: ArrayLike, omega: ArrayLike, h: float) -> Array:
     -------
     (..., 4) unit quaternions.
     """
-    return _quat_euler(_unit_quat(q), as_array(omega, "omega", (3,)), _check_h(h))
+    return _quat_euler(_unit_quat(q), as_array(omega, "omega", (3,)), as_time_step(h))
 
 
 def _polar(R: Array) -> Array:
@@ -436,7 +436,7 @@ def matrix_euler_step(R: ArrayLike, omega: ArrayLike, h: float) -> Array:
     -------
     (..., 3, 3) rotation matrices.
     """
-    return _matrix_euler(as_array(R, "R", (3, 3)), as_array(omega, "omega", (3,)), _check_h(h))
+    return _matrix_euler(as_array(R, "R", (3, 3)), as_array(omega, "omega", (3,)), as_time_step(h))
 
 
 def _quat_exp(q: Array, omega: Array, h: float) -> Array:
@@ -458,7 +458,7 @@ def quat_exp_step(q: ArrayLike, omega: ArrayLike, h: float) -> Array:
     -------
     (..., 4) unit quaternions.
     """
-    return _quat_exp(_unit_quat(q), as_array(omega, "omega", (3,)), _check_h(h))
+    return _quat_exp(_unit_quat(q), as_array(omega, "omega", (3,)), as_time_step(h))
 
 
 def _turn(rotation: str, q: Array, R: Array, omega: Array, h: float) -> Array:
@@ -489,7 +489,7 @@ def _setup(h: float, method: str, rotation: str, gravity: ArrayLike, ground: Gro
     _choice(rotation, "rotation", ROTATION_UPDATES)
     if ground is not None and not isinstance(ground, Ground):
         raise ValueError(f"ground: expected a Ground or None, got {type(ground).__name__}")
-    return _Setup(_check_h(h), method, rotation, as_array(gravity, "gravity", (3,)), ground,
+    return _Setup(as_time_step(h), method, rotation, as_array(gravity, "gravity", (3,)), ground,
                   applied)
 
 

@@ -1,0 +1,23 @@
+"""What the batch keeps of a graded submission: its record, plain data built once from its
+:class:`~autograder.results.Result` by each view (Gradescope's results.json, its row of
+``grades.csv``, the facts of the class summary). The local pool and a cluster's worker
+(which sends it back) build it here; ``--resume`` reads it again from ``grading.json``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .gradescope.feedback import results_json
+from .report import csv_header, csv_row
+from .results import Result
+from .summary import facts
+
+
+def record(name: str, result: Result, digest: str = "") -> dict[str, Any]:
+    """What the batch keeps of a graded submission, as plain data (a cluster's worker sends
+    it back): its ``results.json``, its row and header of ``grades.csv``, the facts the
+    class summary needs, and the digest of what was graded ("" for nothing to resume)."""
+    return {"results": results_json(result, f"Graded {result.submission.name}."),
+            "row": csv_row(name, result),
+            "header": csv_header(result), "facts": facts(name, result), "digest": digest}
