@@ -560,3 +560,43 @@ def test_recorded_fabrik_at_exactly_full_reach(engine):
                 method="fabrik", record=True)
     assert batch.converged.all() and batch.iterations[0] == 0
     np.testing.assert_allclose(batch.positions[:, -1], [[7.0, 0, 0], [0, 7.0, 0]], atol=1e-9)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_every_solver_gets_a_frozen_run_and_its_methods_options_record(method, monkeypatch):
+    """The engine contract: a chain solver is called with a :class:`ChainRun` and a tree
+    solver with the :class:`Problem`, ``tol``, ``max_iter`` and ``record``, both with the
+    method's own options record (frozen, every option given or defaulted)."""
+    import dataclasses
+
+    from course.ik._engine.chain_solvers import ChainRun
+    from course.ik._engine.tree import Problem
+    from course.ik.api import _solve
+    from course.ik.methods import REGISTRY
+
+    spec, calls = REGISTRY[method], []
+
+    def spy(solver):
+        def run(*args):
+            calls.append(args)
+            return solver(*args)
+        return run
+
+    monkeypatch.setitem(REGISTRY, method, dataclasses.replace(
+        spec, tree=spy(spec.tree), chain=None if spec.chain is None else spy(spec.chain)))
+    arm = chain([1.0, 1.0])
+    start = np.tile(IDENT[0], (3, 1))
+    options = {"two_link": {"flip": True}, "ccd": {"tip_to_root": False}, "fabrik": {},
+               "jacobian_transpose": {"max_step": 0.25}, "pseudo_inverse": {"max_step": 0.25},
+               "dls": {"max_step": 0.25}}[method]
+    for engine in ("chain", "tree"):
+        _solve(arm, start, np.zeros(3), {"end_effector": [1.0, 1.0, 0]}, method=method, tol=1e-3,
+               engine=engine, **options)
+    kinds = [type(args[0]) for args in calls]
+    assert kinds == ([ChainRun, Problem] if spec.chain is not None else [Problem, Problem])
+    for *head, record in calls:
+        assert head[1:] in ([], [1e-3, spec.max_iter, False])
+        assert dataclasses.is_dataclass(record) and all(
+            getattr(record, name) == value for name, value in options.items())
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            record.flip = None

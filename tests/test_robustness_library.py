@@ -134,9 +134,9 @@ def _engines(monkeypatch):
     used = []
 
     def spy(solver):
-        def run(*args, **kw):
-            used.append("floats" if kw["ops"] is FLOATS else "arrays")
-            return solver(*args, **kw)
+        def run(chain_run, options):
+            used.append("floats" if chain_run.ops is FLOATS else "arrays")
+            return solver(chain_run, options)
         return run
 
     for name, method in REGISTRY.items():

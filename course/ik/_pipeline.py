@@ -21,11 +21,11 @@ from numpy.typing import ArrayLike
 from course._typing import Array
 from course._validate import as_array, broadcast_leading
 
-from ._engine.chain import SerialChain, serial_chain
+from ._engine.chain import SerialChain, as_vec, serial_chain
 from ._engine.chain_solvers import solve_on_chain
 from ._engine.components import Limit
-from ._engine.request import Request, Solved
-from ._engine.tree import TreeModel, build_model
+from ._engine.request import MethodOptions, Request, Solved
+from ._engine.tree import JointAxis, TreeModel, build_model
 from ._engine.tree_solvers import DEFAULT_DAMPING, solve_on_tree
 from .methods import REGISTRY, Method
 from .result import IKResult, SwingTwist, Target
@@ -38,14 +38,15 @@ Engine = Literal["auto", "chain", "tree"]
 
 def validate(skeleton: Any, local_rotations: ArrayLike, root_position: ArrayLike,
               targets: Any, method: str, root: str | int | None, tol: float,
-              max_iter: int | None, weights: Mapping | None, limits: Mapping | None,
-              record: bool, options: dict[str, Any], reach_start: bool = True) -> Request:
+              max_iter: int | None, weights: Mapping[str | int, Any] | None,
+              limits: Mapping[str | int, Any] | None, record: bool, options: Mapping[str, Any],
+              reach_start: bool = True) -> Request:
     """Every argument of :func:`solve` checked (``ValueError`` naming the first bad one), as
     the :class:`Request` the engines run."""
     spec = _method(method)
     if not isinstance(reach_start, bool | np.bool_):
         raise ValueError(f"reach_start: expected True or False, got {reach_start!r}")
-    options = _options(spec, options)
+    checked = _options(spec, options)
     max_iter = _tol_and_max_iter(spec, tol, max_iter)
     _check_skeleton(skeleton)
     local = _start_pose(skeleton, local_rotations)
@@ -60,14 +61,15 @@ def validate(skeleton: Any, local_rotations: ArrayLike, root_position: ArrayLike
     _check_hinges(skeleton, model, local)
     col_weight = _weights(skeleton, model, weights)
     joint_limits = _limits(skeleton, model, limits)
-    if spec.weights and options["damping"] is None:
-        options["damping"] = DEFAULT_DAMPING * model.length_scale
+    if spec.weights and checked["damping"] is None:
+        checked["damping"] = DEFAULT_DAMPING * model.length_scale
+    method_options: MethodOptions = spec.options_record(**checked)
     return Request(skeleton=skeleton, method=method, local=local, root_pos=root_pos, root=k,
                    pos_t=pos_t, rot_t=rot_t, batched=batched, B=B, model=model, serial=serial,
                    col_weight=col_weight, pos_weight=pos_w, rot_weight=rot_w,
                    limits=joint_limits,
                    limited=bool(limits), tol=tol, max_iter=max_iter, record=record,
-                   options=options, reach_start=bool(reach_start))
+                   options=method_options, reach_start=bool(reach_start))
 
 
 def run(req: Request, engine: Engine) -> IKResult:
@@ -108,13 +110,13 @@ def run_engine(req: Request, engine: Engine) -> IKResult:
                    for row in req.rows()])
 
 
-def _method(method: Any) -> Method:
+def _method(method: Any) -> Method[Any]:
     if not isinstance(method, str) or method not in REGISTRY:
         raise ValueError(f"method: expected one of {tuple(REGISTRY)}, got {method!r}")
     return REGISTRY[method]
 
 
-def _options(spec: Method, options: Mapping[str, Any]) -> dict[str, Any]:
+def _options(spec: Method[Any], options: Mapping[str, Any]) -> dict[str, Any]:
     """The method's options, checked (``ValueError`` naming an option the method does not take
     or a value it cannot use; NaN fails every test), with defaults for those not given or
     None; ``max_angle=inf`` is no cap."""
@@ -135,7 +137,7 @@ def _options(spec: Method, options: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def _tol_and_max_iter(spec: Method, tol: Any, max_iter: Any) -> int:
+def _tol_and_max_iter(spec: Method[Any], tol: Any, max_iter: Any) -> int:
     """``max_iter`` (the method's default for None), after checking it and ``tol``."""
     if not (_is_number(tol) and math.isfinite(tol) and tol > 0):
         raise ValueError(f"tol: expected a positive number, got {tol!r}")
@@ -163,10 +165,11 @@ def _start_pose(skeleton: Any, local_rotations: ArrayLike) -> Array:
     qn = big * np.linalg.norm(local / np.where(big > 0, big, 1.0), axis=-1, keepdims=True)
     if qn.min() < 1e-12:
         raise ValueError("local_rotations: contains a zero quaternion, which is no rotation")
-    return local / qn
+    unit: Array = local / qn
+    return unit
 
 
-def _targets(skeleton: Any, targets: Any, spec: Method,
+def _targets(skeleton: Any, targets: Any, spec: Method[Any],
              k: int) -> tuple[dict[int, Array], dict[int, Array], Array, Array]:
     """Position and orientation targets by joint index, checked, and their relative weights
     (E,) and (E_r,), the largest 1."""
@@ -267,10 +270,11 @@ def _stack(results: list[IKResult]) -> IKResult:
     for i, r in enumerate(results):
         residuals[:len(r.residuals), i] = r.residuals
         residuals[len(r.residuals):, i] = r.error
+    runs = [r.frames for r in results if r.frames is not None]  # every problem's, or none
     frames = None
-    if results[0].frames is not None:
-        F = max(len(r.frames) for r in results)
-        frames = [{key: np.stack([r.frames[min(t, len(r.frames) - 1)][key] for r in results])
+    if runs:
+        F = max(len(run) for run in runs)
+        frames = [{key: np.stack([run[min(t, len(run) - 1)][key] for run in runs])
                    for key in ("positions", "local_rotations")} for t in range(F)]
     return IKResult(
         local_rotations=np.stack([r.local_rotations for r in results]),
@@ -295,9 +299,14 @@ def split_target(value: Any) -> tuple[Any, Any]:
     return value, None
 
 
+# A model's key beside its skeleton: the fixed joint, the effectors and the orientation ones.
+ModelKey = tuple[int, tuple[int, ...], tuple[int, ...]]
+Models = tuple[TreeModel, SerialChain | None]
+
+
 @lru_cache(maxsize=128)
-def _cached_model(parents: tuple, offsets: bytes, kinds: tuple, root: int, eff: tuple,
-                  reff: tuple) -> tuple[TreeModel, SerialChain | None]:
+def _cached_model(parents: tuple[int, ...], offsets: bytes, kinds: tuple[JointAxis, ...],
+                  root: int, eff: tuple[int, ...], reff: tuple[int, ...]) -> Models:
     off = np.frombuffer(offsets).reshape(-1, 3)
     model = build_model(np.array(parents), off, list(kinds), root, list(eff), list(reff))
     return model, serial_chain(model)
@@ -305,25 +314,24 @@ def _cached_model(parents: tuple, offsets: bytes, kinds: tuple, root: int, eff: 
 
 # Per skeleton object (read-only: its offsets cannot be written), the models of the paths
 # solved on it: a slider calls ``solve`` with the same skeleton over and over.
-_MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_MODELS: weakref.WeakKeyDictionary[Any, dict[ModelKey, Models]] = weakref.WeakKeyDictionary()
 
 
-def _model(skeleton: Any, root: int, eff: tuple,
-           reff: tuple) -> tuple[TreeModel, SerialChain | None]:
+def _model(skeleton: Any, root: int, eff: tuple[int, ...], reff: tuple[int, ...]) -> Models:
     """The (cached) model, and its serial chain if it is one."""
     try:
         per_skeleton = _MODELS.setdefault(skeleton, {})
     except TypeError:  # not weakly referenceable: look up by value only
         per_skeleton = {}
-    key = (root, eff, reff)
+    key: ModelKey = (root, eff, reff)
     if key not in per_skeleton:
         per_skeleton[key] = _model_by_value(skeleton, root, eff, reff)
     return per_skeleton[key]
 
 
-def _model_by_value(skeleton: Any, root: int, eff: tuple,
-                    reff: tuple) -> tuple[TreeModel, SerialChain | None]:
-    kinds = []
+def _model_by_value(skeleton: Any, root: int, eff: tuple[int, ...],
+                    reff: tuple[int, ...]) -> Models:
+    kinds: list[JointAxis] = []
     for t in skeleton.joint_types:
         axis = getattr(t, "axis", None)
         kinds.append(tuple(axis) if axis is not None else (False if t.dof == 0 else None))
@@ -379,7 +387,7 @@ def _check_hinges(skeleton: Any, model: TreeModel, local: Array) -> None:
                 "give a turn about the hinge axis (quat_from_axis_angle(axis, angle))")
 
 
-def _weights(skeleton: Any, model: TreeModel, weights: Mapping | None) -> Array:
+def _weights(skeleton: Any, model: TreeModel, weights: Mapping[str | int, Any] | None) -> Array:
     if not weights:
         return model.unit_weights
     w = np.ones(model.n_cols)
@@ -391,11 +399,12 @@ def _weights(skeleton: Any, model: TreeModel, weights: Mapping | None) -> Array:
     return w
 
 
-def _limits(skeleton: Any, m: TreeModel, limits: Mapping | None) -> tuple[Limit | None, ...]:
+def _limits(skeleton: Any, m: TreeModel,
+            limits: Mapping[str | int, Any] | None) -> tuple[Limit | None, ...]:
     """Each variable's :class:`Limit` (None: free), checked."""
     if not limits:
         return m.no_limits
-    out = list(m.no_limits)
+    out: list[Limit | None] = list(m.no_limits)
     var_joint = m.edge_joint[m.var_nodes]
     for key, value in limits.items():
         j = skeleton.index(key)
@@ -418,8 +427,8 @@ def _joint_limit(skeleton: Any, j: int, name: str, value: Any) -> Limit | None:
             raise ValueError(f"{name}: joint {skeleton.names[j]!r} is a hinge; give it a range "
                              "(lo, hi), not a SwingTwist")
         return _swing_twist(skeleton, j, name, value)
-    a = np.asarray(value) if not isinstance(value, str) else None
-    ok = a is not None and a.dtype.kind in "iuf" and not np.isnan(a).any()
+    a = np.asarray(value)
+    ok = a.dtype.kind in "iuf" and not np.isnan(a).any()
     if axis is None:
         if not (ok and a.ndim == 0 and a >= 0):
             raise ValueError(f"{name}: a ball joint takes one largest angle (radians, >= 0) or "
@@ -433,7 +442,7 @@ def _joint_limit(skeleton: Any, j: int, name: str, value: Any) -> Limit | None:
         raise ValueError(f"{name}: a hinge range needs lo <= hi (one angle: >= 0), got {value!r}")
     if not (math.isfinite(lo) or math.isfinite(hi)):
         return None
-    return Limit("hinge", tuple(float(c) for c in axis), lo, hi)
+    return Limit("hinge", as_vec(float(c) for c in axis), lo, hi)
 
 
 def _swing_twist(skeleton: Any, j: int, name: str, value: SwingTwist) -> Limit:
@@ -456,5 +465,5 @@ def _swing_twist(skeleton: Any, j: int, name: str, value: SwingTwist) -> Limit:
         if axis.ndim != 1 or not np.linalg.norm(axis) > 1e-12:
             raise ValueError(f"{name} axis: expected a non-zero vector (3,), got {value.axis!r}")
     axis = axis / np.linalg.norm(axis)
-    return Limit("swing_twist", tuple(axis.tolist()), float(twist[0]), float(twist[1]),
+    return Limit("swing_twist", as_vec(axis.tolist()), float(twist[0]), float(twist[1]),
                  float(cone))

@@ -13,10 +13,21 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import partial
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 from ._engine import chain_solvers as chain
 from ._engine import tree_solvers as tree
+from ._engine.request import (
+    CCDOptions,
+    JacobianOptions,
+    JacobianStep,
+    MethodOptions,
+    NoOptions,
+    TwoLinkOptions,
+)
+
+# The method's options record (:mod:`course.ik._engine.request`), which its solvers take.
+Options = TypeVar("Options", bound=MethodOptions)
 
 
 @dataclass(frozen=True)
@@ -30,7 +41,7 @@ class Option:
 
 
 @dataclass(frozen=True)
-class Method:
+class Method(Generic[Options]):
     """One IK method, as :func:`course.ik.solve` runs it.
 
     Attributes
@@ -41,6 +52,9 @@ class Method:
     max_iter : int
         Default iteration budget.
     options : mapping name -> Option
+    options_record : callable
+        Builds the options record the solvers take from the checked options (every default
+        filled in), by keyword.
     orientations : bool
         Takes orientation targets (else positions only).
     targets : str
@@ -52,11 +66,11 @@ class Method:
         Uses per-joint ``weights`` (the regulariser :math:`W`).
     iterative : bool
         Iterates (so a singular straight start is bent first); two-link is closed-form.
-    tree : callable
-        The general engine's solver, ``(problem, tol, max_iter, record, **options)``.
-    chain : callable or None
-        The serial-chain solver, ``(chain, R, base, p0, target, tol, max_iter, *, limits,
-        record, ops, **options)``; None: the tree engine runs every skeleton.
+    tree : TreeSolver
+        The general engine's solver (:class:`~course.ik._engine.tree_solvers.TreeSolver`).
+    chain : ChainSolver or None
+        The serial-chain solver (:class:`~course.ik._engine.chain_solvers.ChainSolver`);
+        None: the tree engine runs every skeleton.
     batch_from : float
         Batches on the chain smaller than this run one problem at a time in floats (the
         array engine pays a numpy call per component and step, for as many iterations as
@@ -69,8 +83,9 @@ class Method:
     summary: str
     max_iter: int
     options: Mapping[str, Option]
-    tree: Callable[..., Any]
-    chain: Callable[..., Any] | None = None
+    options_record: Callable[..., Options]
+    tree: tree.TreeSolver[Options]
+    chain: chain.ChainSolver[Options] | None = None
     orientations: bool = False
     targets: str = ""
     limits: str = "projected after every step"
@@ -104,31 +119,31 @@ _JACOBIAN_TARGETS = ("positions and orientations (the 6-row Jacobian), each targ
                      "weighted by the square root of its weight")
 
 
-def _jacobian(name: str, summary: str, max_iter: int, batch_from: float) -> Method:
+def _jacobian(name: JacobianStep, summary: str, max_iter: int,
+              batch_from: float) -> Method[JacobianOptions]:
     return Method(
-        name, summary, max_iter, _JACOBIAN_OPTIONS,
-        tree=partial(tree.solve_jacobian, method=name),
-        chain=partial(chain.solve_jacobian, method=name),
+        name, summary, max_iter, _JACOBIAN_OPTIONS, partial(JacobianOptions, method=name),
+        tree=tree.solve_jacobian, chain=chain.solve_jacobian,
         orientations=True, targets=_JACOBIAN_TARGETS, weights=True, batch_from=batch_from)
 
 
 # Iteration budgets: Jacobian transpose converges linearly and slowly near the target, and its
 # slowest problems take thousands of iterations, so its batches never beat its single solves.
-REGISTRY: dict[str, Method] = {m.name: m for m in (
+REGISTRY: dict[str, Method[Any]] = {m.name: m for m in (
     Method("two_link", "analytic hip-knee-ankle (law of cosines, pole, hinge knees)", 1,
-           {"pole": Option(), "flip": Option(False)}, tree=tree.solve_two_link,
+           {"pole": Option(), "flip": Option(False)}, TwoLinkOptions, tree=tree.solve_two_link,
            targets="one position, two bones from the fixed joint: the law of cosines places "
                    "the joints, no orientation can be asked of them",
            limits="projected after placing the joints", iterative=False),
     Method("ccd", "cyclic coordinate descent: one joint at a time turns the end to the target",
            200, {"tip_to_root": Option(True),
-                 "max_angle": Option(None, _positive_angle, _ANGLE)},
+                 "max_angle": Option(None, _positive_angle, _ANGLE)}, CCDOptions,
            orientations=True,
            targets="positions and orientations: each joint takes the weighted least-squares "
                    "turn of the targets below it, an orientation as its frame's three axes "
                    "(the last joint of an orientation target turns the end to it)",
            tree=tree.solve_ccd, chain=chain.solve_ccd, batch_from=256),
-    Method("fabrik", "forward and backward reaching on joint positions", 200, {},
+    Method("fabrik", "forward and backward reaching on joint positions", 200, {}, NoOptions,
            orientations=True,
            targets="positions and orientations: sub-bases reach to the weighted centroid of "
                    "their branches; after the backward pass the last joint of an orientation "

@@ -11,7 +11,14 @@
   :mod:`.history` (convergence bookkeeping) and :mod:`.request` (a validated solve) are
   shared by both.
 
-Which method runs on which engine is the method's record in :mod:`course.ik.methods`. The
+The contract between the two tiers: a chain solver is a
+:class:`~.chain_solvers.ChainSolver`, ``(ChainRun, options) -> ChainSolved``; a tree solver a
+:class:`~.tree_solvers.TreeSolver`, ``(Problem, tol, max_iter, record, options) ->
+TreeSolved``; ``options`` is the method's typed record of :mod:`.request`
+(:class:`~.request.JacobianOptions`, :class:`~.request.CCDOptions`, ...), and
+:func:`~.chain_solvers.solve_on_chain` / :func:`~.tree_solvers.solve_on_tree` run one on a
+:class:`~.request.Request`. Which method runs on which engine is the method's record in
+:mod:`course.ik.methods`. The
 engines import the lecture modules' maths (the Jacobian steps, the two-link triangle); those
 import nothing from here; the kernels they share live in :mod:`course.rotations._kernels`.
 """

@@ -28,9 +28,9 @@ a ball step :math:`R_i \leftarrow \exp(Q_{i-1}^{-1}\delta) R_i`, as on the gener
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 
@@ -55,9 +55,13 @@ from .components import (
     scale,
     sub,
 )
-from .ops import FLOATS, Ops
+from .ops import FLOATS, Flag, Ops
 from .reach import REACH_START, reach_points
-from .tree import bend_direction, bend_increment, outside_shell
+from .tree import TreeModel, bend_direction, bend_increment, outside_shell
+
+Pose = list[Quat]  # the local rotations of a chain's nodes, root to tip
+Points = list[Vec]  # a chain's node positions, root to tip
+ChainLimits = list[tuple[int, Limit]]  # (node, limit) of every limited variable
 
 
 # --------------------------------------------------------------------------- the chain
@@ -77,10 +81,11 @@ class SerialChain:
         return (self.variables == tuple(range(len(self.joints) - 1))
                 and all(a is None for a in self.axes))
 
-    def forward(self, R: list[Quat], base: Quat, p0: Vec) -> tuple[list[Quat], list[Vec]]:
+    def forward(self, R: Pose, base: Quat, p0: Vec) -> tuple[list[Quat], Points]:
         r"""Global orientations and positions, :math:`Q_i = Q_{i-1}R_i`,
         :math:`p_i = p_{i-1} + Q_{i-1} l_i`."""
-        Q, P = [], []
+        Q: list[Quat] = []
+        P: Points = []
         q, p = base, p0
         for i, (r, bone) in enumerate(zip(R, self.bones, strict=True)):
             if i:
@@ -90,10 +95,11 @@ class SerialChain:
             P.append(p)
         return Q, P
 
-    def columns(self, Q: list[Quat], P: list[Vec], base: Quat) -> list[Vec]:
+    def columns(self, Q: list[Quat], P: Points, base: Quat) -> list[Vec]:
         r"""Jacobian columns :math:`a\times(e - r_i)`: the world hinge axis
         :math:`a = Q_{i-1}\hat a`, or the world x, y and z axes for a ball joint."""
-        e, cols = P[-1], []
+        e = P[-1]
+        cols: list[Vec] = []
         for v, axis in zip(self.variables, self.axes, strict=True):
             rx, ry, rz = sub(e, P[v])
             if axis is None:
@@ -102,8 +108,7 @@ class SerialChain:
                 cols.append(cross(quat_rotate(Q[v - 1] if v else base, axis), (rx, ry, rz)))
         return cols
 
-    def step(self, R: list[Quat], Q: list[Quat], base: Quat, delta: list[Scalar],
-             ops: Ops) -> list[Quat]:
+    def step(self, R: Pose, Q: list[Quat], base: Quat, delta: list[Scalar], ops: Ops) -> Pose:
         r"""Turn the variables by ``delta`` (one entry per column): a hinge
         :math:`R \leftarrow \exp(\delta\hat a) R`, a ball by the world rotation vector
         :math:`\delta` applied to :math:`Q_i`, i.e. :math:`R \leftarrow
@@ -111,21 +116,22 @@ class SerialChain:
         R, c = list(R), 0
         for v, axis in zip(self.variables, self.axes, strict=True):
             if axis is None:
-                local = quat_rotate(quat_conjugate(Q[v - 1] if v else base), tuple(delta[c:c + 3]))
+                dx, dy, dz = delta[c:c + 3]
+                local = quat_rotate(quat_conjugate(Q[v - 1] if v else base), (dx, dy, dz))
                 turn, c = quat_from_rotvec(local, ops), c + 3
             else:
                 turn, c = quat_from_axis_angle(axis, delta[c], ops), c + 1
             R[v] = quat_mul(turn, R[v])
         return R
 
-    def limits(self, limits: tuple[Limit | None, ...]) -> list[tuple[int, Limit]]:
+    def limits(self, limits: tuple[Limit | None, ...]) -> ChainLimits:
         """``(node, limit)`` of every variable with a limit (``limits``: one entry per
         variable, None when free), for :meth:`project`."""
         return [(v, lim) for v, lim in zip(self.variables, limits, strict=True) if lim]
 
-    def bend_if_straight(self, R: list[Quat], Q: list[Quat], P: list[Vec], base: Quat, p0: Vec,
-                         target: Vec, tol: float, limits: list[tuple], ops: Ops
-                         ) -> tuple[list[Quat], list[Quat], list[Vec]]:
+    def bend_if_straight(self, R: Pose, Q: list[Quat], P: Points, base: Quat, p0: Vec,
+                         target: Vec, tol: float, limits: ChainLimits, ops: Ops
+                         ) -> tuple[Pose, list[Quat], Points]:
         """As :meth:`course.ik._engine.tree.Problem.bend_if_straight` (the same test,
         :func:`~course.ik._engine.tree.bend_direction`): ``R`` (with its ``Q`` and ``P``) bent
         off a straight chain whose target lies on its line, unreached and not beyond the
@@ -147,9 +153,9 @@ class SerialChain:
                               np.array([far]), slack, tol)
         if bend is None:
             return R, Q, P
-        u, need = bend
+        direction, need = bend
         hinge = np.array([a is not None for a in self.axes])
-        delta = np.where(need[:, None], bend_increment(hinge, u), 0.0)
+        delta = np.where(need[:, None], bend_increment(hinge, direction), 0.0)
         R = self.step(R, Q, base, delta[0].tolist() if ops is FLOATS else list(delta.T), ops)
         if limits:
             R = self.project(R, limits, ops)
@@ -163,7 +169,7 @@ class SerialChain:
         if self.variables != tuple(range(len(self.joints) - 1)):
             return False
         first = self.axes[0]
-        return self.free_balls or all(
+        return self.free_balls or first is not None and all(
             a is not None and math.sqrt(dot(cross(a, first), cross(a, first))) < 1e-9
             for a in self.axes)
 
@@ -171,13 +177,14 @@ class SerialChain:
     def bend_reach(self) -> float:
         """The reach the reach-aware start measures against: the sum of the bones, for
         hinges of their parts across the common axis."""
-        if self.free_balls:
-            return self.reach[0]
         a = self.axes[0]
-        return sum(math.sqrt(max(dot(b, b) - dot(b, a) ** 2, 0.0)) for b in self.bones[1:])
+        if self.free_balls or a is None:
+            return self.reach[0]
+        return sum((math.sqrt(max(dot(b, b) - dot(b, a) ** 2, 0.0)) for b in self.bones[1:]),
+                   start=0.0)
 
-    def reach_start(self, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
-                    limits: list[tuple], ops: Ops) -> tuple[list[Quat], Any, Any]:
+    def reach_start(self, R: Pose, base: Quat, p0: Vec, target: Vec, tol: float,
+                    limits: ChainLimits, ops: Ops) -> tuple[Pose, Flag, Flag]:
         """As :meth:`course.ik._engine.tree.Problem.reach_start` (the same points,
         :func:`~course.ik._engine.reach.reach_points`): ``R`` put on the reach-aware start,
         which problems took it, and which are done (stretched, no limits: the start is the
@@ -196,14 +203,15 @@ class SerialChain:
             (R, base, p0, target), rows)
         Q, P = self.forward(Rn, bn, pn)
         B, n = np.size(P[0][0]), len(P)
-        normal = None if self.free_balls else ops.stack([quat_rotate(bn, self.axes[0])], B)
+        axis = self.axes[0]  # bendable: all hinges about this axis, or all balls (None)
+        normal = None if axis is None else ops.stack([quat_rotate(bn, axis)], B)
         start = reach_points(ops.stack(P, B).reshape(B, n, 3), ops.stack([tn], B).reshape(B, 3),
                              None if normal is None else normal.reshape(B, 3), tol)
         if start is None:
             return R, none, none
         wanted, need, straight = start
-        W = ([tuple(w) for w in wanted[0].tolist()] if ops is FLOATS
-             else [tuple(np.ascontiguousarray(wanted[:, i].T)) for i in range(n)])
+        W = ([as_vec(w) for w in wanted[0].tolist()] if ops is FLOATS
+             else [as_vec(np.ascontiguousarray(wanted[:, i].T)) for i in range(n)])
         placed = ops.select(ops.flag(need), self.place(Rn, bn, pn, W, limits, ops), Rn)
         done = ops.flag(straight & (not limits))
         if rows is None:
@@ -211,8 +219,8 @@ class SerialChain:
         return (ops.put(ops.copy(R), rows, placed), ops.put(none.copy(), rows, need),
                 ops.put(none.copy(), rows, done))
 
-    def place(self, R: list[Quat], base: Quat, p0: Vec, wanted: list[Vec], limits: list[tuple],
-              ops: Ops) -> list[Quat]:
+    def place(self, R: Pose, base: Quat, p0: Vec, wanted: Points, limits: ChainLimits,
+              ops: Ops) -> Pose:
         """``R`` with every joint, root to tip, turned to point its bone at its ``wanted`` next
         point (:func:`aim`: a ball by the shortest arc, a hinge about its axis) and projected
         into its limit, as :meth:`course.ik._engine.tree.Problem.fit` places a chain (exact
@@ -230,13 +238,13 @@ class SerialChain:
             q = quat_mul(q, R[i])
         return R
 
-    def unreachable(self, target: Vec, p0: Vec, ops: Ops) -> Any:
+    def unreachable(self, target: Vec, p0: Vec, ops: Ops) -> Flag:
         """Whether the target lies outside the shell the effector can reach from ``p0``."""
         e = sub(target, p0)
         return outside_shell(ops.sqrt(dot(e, e)), *self.reach)
 
     @staticmethod
-    def project(R: list[Quat], limits: list[tuple], ops: Ops) -> list[Quat]:
+    def project(R: Pose, limits: ChainLimits, ops: Ops) -> Pose:
         """Variables projected into their :meth:`limits` (:func:`limit`)."""
         R = list(R)
         for v, lim in limits:
@@ -244,28 +252,37 @@ class SerialChain:
         return R
 
 
-def serial_chain(model: Any) -> SerialChain | None:
+def serial_chain(model: TreeModel) -> SerialChain | None:
     """The :class:`SerialChain` of a :class:`~course.ik._engine.tree.TreeModel`, or None if its
     paths are not one chain from the fixed joint (parent frame held) to a position target."""
     n = model.n_nodes
     if (not model.anchor_parent or len(model.rot_effectors) or len(model.effectors) != 1
             or model.effectors[0] != n - 1 or np.any(model.parent[1:] != np.arange(n - 1))):
         return None
-    axes = np.zeros((len(model.var_nodes), 3))
-    first = np.searchsorted(model.col_var, np.arange(len(model.var_nodes)))
-    axes[model.hinge] = model.col_axis[first[model.hinge]]
     return SerialChain(
         joints=tuple(int(j) for j in model.joints),
-        bones=tuple(tuple(float(c) for c in b) for b in model.bone),
+        bones=tuple(as_vec(b.tolist()) for b in model.bone),
         variables=tuple(int(v) for v in model.var_nodes),
-        axes=tuple(tuple(float(c) for c in a) if h else None
-                   for a, h in zip(axes, model.hinge, strict=True)),
+        axes=tuple(as_vec(a.tolist()) if h else None
+                   for a, h in zip(model.var_axes(), model.hinge, strict=True)),
         reach=(float(model.reach_far[0]), float(model.reach_near[0]), model.reach_slack),
     )
 
 
-def fit_chain(chain: SerialChain, R: list[Quat], Q: list[Quat], P_old: list[Vec], base: Quat,
-              P_new: list[Vec], ops: Ops) -> tuple[list[Quat], list[Vec]]:
+def as_vec(c: Iterable[Scalar]) -> Vec:
+    """Three components as a vector (three floats, or three (B,) rows)."""
+    x, y, z = c
+    return x, y, z
+
+
+def as_quat(c: Iterable[Scalar]) -> Quat:
+    """Four components as a quaternion ``(w, x, y, z)`` (four floats, or four (B,) rows)."""
+    w, x, y, z = c
+    return w, x, y, z
+
+
+def fit_chain(chain: SerialChain, R: Pose, Q: list[Quat], P_old: Points, base: Quat,
+              P_new: Points, ops: Ops) -> tuple[Pose, Points]:
     r"""Local rotations that put a ball-joint chain on the points ``P_new`` (same bones): each
     node's global orientation turned by the shortest arc from its old bone direction to the
     new one, :math:`Q_i' = \mathrm{arc}(p_{i+1} - p_i,\ p'_{i+1} - p'_i)\,Q_i` (so every bone

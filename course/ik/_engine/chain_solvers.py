@@ -5,16 +5,16 @@ component arrays (:mod:`course.ik._engine.ops`).
 They are the methods of :mod:`course.ik._engine.tree_solvers` specialised to one chain and one
 position target (tests check both engines give the same answers): a Jacobian step solves a
 3x3 system in closed form, FABRIK on free balls iterates on points alone and fits the
-rotations once, CCD turns the effector alone while it sweeps tip to root. Every solver has the
-signature ``(chain, R, base, p0, target, tol, max_iter, *, limits, record, ops, **options)``
-and returns the final local rotations of the nodes, their positions, the :class:`History` and
-the recorded local rotations; :func:`solve_on_chain` runs one on a :class:`Request`.
+rotations once, CCD turns the effector alone while it sweeps tip to root. Every solver is a
+:class:`ChainSolver`: it takes a :class:`ChainRun` and its method's options record
+(:mod:`course.ik._engine.request`) and returns a :class:`ChainSolved`; :func:`solve_on_chain`
+runs one on a :class:`Request`.
 """
 
 from __future__ import annotations
 
 from functools import reduce
-from typing import Any
+from typing import Any, NamedTuple, Protocol, TypeVar
 
 import numpy as np
 
@@ -23,7 +23,7 @@ from course._typing import Array
 from course.rotations._kernels import TINY
 
 from ..jacobian import lost_rank
-from .chain import SerialChain, fit_chain
+from .chain import ChainLimits, Points, Pose, SerialChain, as_quat, as_vec, fit_chain
 from .components import (
     Quat,
     Scalar,
@@ -40,50 +40,114 @@ from .components import (
     units_like,
 )
 from .history import History
-from .ops import ARRAYS, FLOATS, Ops
-from .request import Request, Solved
+from .ops import ARRAYS, FLOATS, Components, Flag, Ops
+from .request import CCDOptions, JacobianOptions, NoOptions, Request, Solved
+
+Options = TypeVar("Options", contravariant=True)
 
 
-def solve_on_chain(req: Request, solver: Any, limits: list[tuple], weighted: bool) -> Solved:
+class ChainRun(NamedTuple):
+    """What a chain solver gets: one problem in Python floats or a batch on component arrays
+    (``ops``), every quaternion and vector as components (:mod:`.components`).
+
+    Attributes
+    ----------
+    chain : SerialChain
+    start : Pose
+        The starting local rotations of the nodes (projected into the limits, and on the
+        reach-aware start where it applies).
+    base, p0 : Quat, Vec
+        The held frame and the position of node 0.
+    target : Vec
+        The effector's position target.
+    tol, max_iter, record
+        As :func:`course.ik.solve` takes them.
+    limits : ChainLimits
+        ``(node, limit)`` of every limited variable (empty: none).
+    ops : Ops
+        :data:`~.ops.FLOATS` (one problem) or :data:`~.ops.ARRAYS` (a batch).
+    done : Flag
+        The problems whose start is already their best pose (:mod:`.reach`).
+    inv_w2 : tuple of float, length C
+        The columns' :math:`W^{-2}` (the Jacobian methods'; empty for the others).
+    """
+
+    chain: SerialChain
+    start: Pose
+    base: Quat
+    p0: Vec
+    target: Vec
+    tol: float
+    max_iter: int
+    record: bool
+    limits: ChainLimits
+    ops: Ops
+    done: Flag
+    inv_w2: tuple[float, ...] = ()
+
+
+class ChainSolved(NamedTuple):
+    """What a chain solver returns: the final local rotations of the nodes ``R``, their
+    positions ``P`` (forward kinematics), the :class:`History`, and the local rotations before
+    the first and after every iteration (``record``; else empty)."""
+
+    R: Pose
+    P: Points
+    history: History
+    frames: list[Pose]
+
+
+class ChainSolver(Protocol[Options]):
+    """A method on the serial chain: ``solver(run, options) -> ChainSolved``, ``options`` the
+    method's record (:mod:`course.ik._engine.request`)."""
+
+    def __call__(self, run: ChainRun, options: Options, /) -> ChainSolved: ...
+
+
+def solve_on_chain(req: Request, solver: ChainSolver[Any], limits: ChainLimits,
+                   weighted: bool) -> Solved:
     """Run a chain ``solver`` on a request whose paths are ``req.serial``: one problem in
     Python floats (``req.local`` (J, 4), ``req.root_pos`` and the target (3,)), or a batch on
     component arrays; ``limits`` are ``req.serial.limits(...)`` (empty: none), and a
     ``weighted`` solver also gets the columns' ``inv_w2``, :math:`W^{-2}`."""
     chain, skeleton, B = req.serial, req.skeleton, req.B
+    if chain is None:
+        raise ValueError("solve_on_chain: the request's paths are not one serial chain")
     ops = ARRAYS if req.batched else FLOATS
     joints = list(chain.joints)
-    (target,) = req.pos_t.values()
+    (target_a,) = req.pos_t.values()
     local, root_pos = req.local, req.root_pos
     if req.batched:
         local = np.broadcast_to(local, (B, skeleton.n_joints, 4))
         root_pos = np.broadcast_to(root_pos, (B, 3))
+    base: Quat
     if req.root == 0:  # the world frame is held and joint 0 sits at the root position
-        base, p0 = (1.0, 0.0, 0.0, 0.0), _components(root_pos, ops)
+        base, p0 = (1.0, 0.0, 0.0, 0.0), as_vec(_components(root_pos, ops))
     else:
         positions, orientations = fk.forward_kernel(skeleton.parents, skeleton.offsets,
                                                         local, root_pos)
-        base = _components(orientations[..., skeleton.parents[req.root], :], ops)
-        p0 = _components(positions[..., req.root, :], ops)
+        base = as_quat(_components(orientations[..., skeleton.parents[req.root], :], ops))
+        p0 = as_vec(_components(positions[..., req.root, :], ops))
     if ops is FLOATS:
         rows = local.tolist()
-        start = [tuple(rows[j]) for j in joints]
-        target = tuple(target.tolist())
+        start = [as_quat(rows[j]) for j in joints]
+        target = as_vec(target_a.tolist())
     else:
-        start = [_components(local[:, j], ops) for j in joints]
-        target = _components(np.broadcast_to(target, (B, 3)), ops)
+        start = [as_quat(_components(local[:, j], ops)) for j in joints]
+        target = as_vec(_components(np.broadcast_to(target_a, (B, 3)), ops))
     R = start
     if limits:
         R = chain.project(R, limits, ops)
     reach_start = done = ops.full(target[0], False)
     if req.reach_start and chain.bendable:  # near the reach: bent to its distance (reach.py)
         R, reach_start, done = chain.reach_start(R, base, p0, target, req.tol, limits, ops)
-    weights = {"inv_w2": tuple((1.0 / req.col_weight**2).tolist())} if weighted else {}
-    R, P, history, frames = solver(chain, R, base, p0, target, req.tol, req.max_iter,
-                                   limits=limits, record=req.record, ops=ops, done=done,
-                                   **weights, **req.options)
+    inv_w2 = tuple((1.0 / req.col_weight**2).tolist()) if weighted else ()
+    R, P, history, frames = solver(
+        ChainRun(chain, R, base, p0, target, req.tol, req.max_iter, req.record, limits, ops,
+                 done, inv_w2), req.options)
     covers = chain.joints == tuple(range(skeleton.n_joints))  # a chain skeleton: its own FK
 
-    def pose(R: list, P: list | None = None) -> tuple[Array, Array]:
+    def pose(R: Pose, P: Points | None = None) -> tuple[Array, Array]:
         """Local rotations (unit, in the starting quaternions' signs) and positions of ``R``;
         ``P``, if given, are the chain's positions of ``R`` already computed."""
         q = ops.stack(units_like(R, start, ops), B)
@@ -100,7 +164,7 @@ def solve_on_chain(req: Request, solver: Any, limits: list[tuple], weighted: boo
                   reach_start)
 
 
-def _components(a: Array, ops: Ops) -> tuple:
+def _components(a: Array, ops: Ops) -> Components:
     """(c,) -> c floats for one problem; (B, c) -> c contiguous (B,) rows for a batch."""
     if ops is FLOATS:
         return tuple(a.tolist())
@@ -108,7 +172,11 @@ def _components(a: Array, ops: Ops) -> tuple:
 
 
 # --------------------------------------------------------------------------- Jacobian methods
-def increment(cols: list[Vec], e: Vec, method: str, inv_w2: np.ndarray, damping: float,
+# The six entries (a00, a01, a02, a11, a12, a22) of a symmetric 3x3 matrix, as components.
+Sym3 = tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar]
+
+
+def increment(cols: list[Vec], e: Vec, method: str, inv_w2: tuple[float, ...], damping: float,
               rcond: float, ops: Ops) -> list[Scalar]:
     r"""The joint increment of a Jacobian method, :math:`\Delta\theta = W^{-2}J^T z`.
 
@@ -130,7 +198,7 @@ def increment(cols: list[Vec], e: Vec, method: str, inv_w2: np.ndarray, damping:
         keep = lam > rcond * rcond * lam[..., -1:]
         inv = np.where(keep, 1.0 / np.where(keep, lam, 1.0), 0.0)
         y = np.einsum("...ji,...j->...i", V, np.stack(np.broadcast_arrays(*e), -1))
-        z = ops.vector(np.einsum("...ij,...j->...i", V, inv * y))
+        z = as_vec(ops.vector(np.einsum("...ij,...j->...i", V, inv * y)))
     else:
         a00, a01, a02, a11, a12, a22 = A
         Ae = (a00 * e[0] + a01 * e[1] + a02 * e[2], a01 * e[0] + a11 * e[1] + a12 * e[2],
@@ -140,7 +208,7 @@ def increment(cols: list[Vec], e: Vec, method: str, inv_w2: np.ndarray, damping:
     return [dot(c, z) * iw for c, iw in zip(cols, inv_w2, strict=True)]
 
 
-def gram(cols: list[Vec], inv_w2: np.ndarray) -> tuple:
+def gram(cols: list[Vec], inv_w2: tuple[float, ...]) -> Sym3:
     r""":math:`A = J W^{-2} J^T = \sum_c J_c J_c^T / w_c^2` as its six entries
     ``(a00, a01, a02, a11, a12, a22)``."""
     a00 = a01 = a02 = a11 = a12 = a22 = 0.0
@@ -151,7 +219,7 @@ def gram(cols: list[Vec], inv_w2: np.ndarray) -> tuple:
     return a00, a01, a02, a11, a12, a22
 
 
-def _well_conditioned(A: tuple, rcond: float) -> Any:
+def _well_conditioned(A: Sym3, rcond: float) -> Flag:
     r"""Whether no eigenvalue of the PSD ``A`` is below :math:`\text{rcond}^2\lambda_{max}`,
     sufficient test: :math:`\lambda_{min}/\lambda_{max} \ge \det A / (\mathrm{tr} A)^3`."""
     a00, a01, a02, a11, a12, a22 = A
@@ -161,7 +229,7 @@ def _well_conditioned(A: tuple, rcond: float) -> Any:
     return det > rcond * rcond * tr * tr * tr
 
 
-def _solve_sym(A: tuple, e: Vec, lam2: float, ops: Ops) -> Vec:
+def _solve_sym(A: Sym3, e: Vec, lam2: float, ops: Ops) -> Vec:
     r""":math:`(A + \lambda^2 I)^{-1} e` for symmetric 3x3 ``A``, by the adjugate."""
     a00, a01, a02, a11, a12, a22 = A
     a00, a11, a22 = a00 + lam2, a11 + lam2, a22 + lam2
@@ -174,31 +242,23 @@ def _solve_sym(A: tuple, e: Vec, lam2: float, ops: Ops) -> Vec:
             (c02 * x + c12 * y + c22 * z) * inv)
 
 
-def solve_jacobian(
-    chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
-    max_iter: int, *, method: str, inv_w2: np.ndarray, damping: float, rcond: float,
-    max_step: float, limits: list[tuple], record: bool, ops: Ops, done: Any = False,
-) -> tuple[list[Quat], list[Vec], History, list[list[Quat]]]:
-    """Iterate a Jacobian method, as :func:`.tree_solvers.solve_jacobian` does on the general
-    model: capped steps (``max_step``), backtracking (a step that raises the error is
-    undone and the next one halved), the shared :class:`History` bookkeeping.
-
-    Returns
-    -------
-    R : final local rotations of the nodes
-    P : their positions (forward kinematics)
-    history : History
-    frames : the local rotations before the first and after every iteration (``record``)
-    """
-    Q, P = chain.forward(R, base, p0)
-    R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
+def solve_jacobian(run: ChainRun, options: JacobianOptions, /) -> ChainSolved:
+    """Iterate a Jacobian method (``options.method``), as :func:`.tree_solvers.solve_jacobian`
+    does on the general model: capped steps (``max_step``), backtracking (a step that raises
+    the error is undone and the next one halved), the shared :class:`History` bookkeeping."""
+    chain, base, p0, target, limits, ops = (run.chain, run.base, run.p0, run.target,
+                                            run.limits, run.ops)
+    method, damping, rcond, max_step = (options.method, options.damping, options.rcond,
+                                        options.max_step)
+    Q, P = chain.forward(run.start, base, p0)
+    R, Q, P = chain.bend_if_straight(run.start, Q, P, base, p0, target, run.tol, limits, ops)
     e = sub(target, P[-1])
     err = ops.sqrt(dot(e, e))
-    history = History(err, tol, max_iter, ops=ops, done=done)
-    frames = [R] if record else []
+    history = History(err, run.tol, run.max_iter, ops=ops, done=run.done)
+    frames = [R] if run.record else []
     step_scale = 1.0
     while ops.any(history.active) and chain.variables:
-        delta = increment(chain.columns(Q, P, base), e, method, inv_w2, damping, rcond, ops)
+        delta = increment(chain.columns(Q, P, base), e, method, run.inv_w2, damping, rcond, ops)
         big = reduce(ops.maximum, (ops.abs(d) for d in delta))
         k = ops.minimum(1.0, max_step / ops.maximum(big, 1e-300)) * step_scale
         k = k * history.active
@@ -212,18 +272,18 @@ def solve_jacobian(
         step_scale = ops.where(worse, 0.5 * step_scale, ops.minimum(1.0, 2.0 * step_scale))
         R, Q, P, e, err = ops.select(worse, (R, Q, P, e, err), (trial, Q_t, P_t, e_t, err_t))
         history.update(err)
-        if record:
+        if run.record:
             frames.append(R)
     if not ops.all(history.converged):
         cols = np.array([np.broadcast_arrays(*c) for c in chain.columns(Q, P, base)])
         history.singular = ops.flag(lost_rank(np.moveaxis(cols.reshape(len(cols), 3, -1), -1, 0),
                                               rcond))
-    return R, P, history, frames
+    return ChainSolved(R, P, history, frames)
 
 
 # --------------------------------------------------------------------------- FABRIK
-def follow(P: list[Vec], first: int, step: int, d: list[Scalar], rest: list[Vec],
-           ops: Ops) -> list[Vec]:
+def follow(P: Points, first: int, step: int, d: list[Scalar], rest: list[Vec],
+           ops: Ops) -> Points:
     r"""Pull the points after ``P[first]`` (``step = +1``: towards the tip, ``-1``: towards the
     root) one by one back to their bone lengths:
     :math:`p_j \leftarrow p_i + d\,\widehat{(p_j - p_i)}`, with :math:`p_i` the point just
@@ -252,8 +312,8 @@ def follow(P: list[Vec], first: int, step: int, d: list[Scalar], rest: list[Vec]
     return P
 
 
-def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], rest: list[Vec],
-                  ops: Ops) -> list[Vec]:
+def reach_forward(P: Points, target: Vec, d: list[Scalar], rest: list[Vec],
+                  ops: Ops) -> Points:
     r"""FABRIK's forward reaching: :math:`p_n \leftarrow t`, then
     :math:`p_i \leftarrow p_{i+1} + d_i\,\widehat{(p_i - p_{i+1})}` down to the root.
     ``rest`` are the unit bone directions (root to tip), reversed where two joints coincide."""
@@ -262,8 +322,8 @@ def reach_forward(P: list[Vec], target: Vec, d: list[Scalar], rest: list[Vec],
     return follow(P, len(P) - 1, -1, d, rest, ops)
 
 
-def fabrik_pass(P: list[Vec], target: Vec, root: Vec, d: list[Scalar], rest: list[Vec],
-                ops: Ops) -> list[Vec]:
+def fabrik_pass(P: Points, target: Vec, root: Vec, d: list[Scalar], rest: list[Vec],
+                ops: Ops) -> Points:
     r"""One FABRIK iteration: forward reaching (:func:`reach_forward`), then backward
     reaching (:math:`p_0 \leftarrow b`, then :math:`p_{i+1} \leftarrow p_i +
     d_i\,\widehat{(p_{i+1} - p_i)}`); ``rest`` are the unit bone directions (root to tip)
@@ -273,10 +333,11 @@ def fabrik_pass(P: list[Vec], target: Vec, root: Vec, d: list[Scalar], rest: lis
     return follow(P, 0, 1, d, rest, ops)
 
 
-def bone_directions(P: list[Vec], ops: Ops) -> tuple[list[Scalar], list[Vec]]:
+def bone_directions(P: Points, ops: Ops) -> tuple[list[Scalar], list[Vec]]:
     r"""Bone lengths :math:`d_i = \lVert p_{i+1} - p_i\rVert` and unit directions of chain
     points ``P`` (+y for a zero bone)."""
-    d, rest = [], []
+    d: list[Scalar] = []
+    rest: list[Vec] = []
     for a, b in zip(P[:-1], P[1:], strict=True):
         x, y, z = sub(b, a)
         length = ops.sqrt(x * x + y * y + z * z)
@@ -292,9 +353,9 @@ def bone_directions(P: list[Vec], ops: Ops) -> tuple[list[Scalar], list[Vec]]:
     return d, rest
 
 
-def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Ops,
-                  frames: list | None = None, errors: list | None = None
-                  ) -> tuple[list[Vec], Any, Any]:
+def fabrik_points(P: Points, target: Vec, tol: float, max_iter: int, ops: Ops,
+                  frames: list[Points] | None = None, errors: list[Scalar] | None = None
+                  ) -> tuple[Points, Scalar, Scalar]:
     r"""FABRIK on chain points ``P`` (``P[0]`` fixed; bone lengths taken from them).
 
     A target beyond :math:`\sum d_i - tol` (and not yet reached) is answered in one pass, the
@@ -333,8 +394,8 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Ops
             active = err >= tol
         else:  # a batch, some problems done: iterate only those still running
             idx = np.flatnonzero(active)
-            Q, t = fabrik_pass(*ops.take((P, target, root, d, rest), idx), ops), \
-                ops.take(target, idx)
+            P_i, t, root_i, d_i, rest_i = ops.take((P, target, root, d, rest), idx)
+            Q = fabrik_pass(P_i, t, root_i, d_i, rest_i, ops)
             err_q = ops.dist(Q[-1], t)
             P = ops.put(P, idx, Q)
             err = ops.put(err, idx, err_q)
@@ -347,32 +408,29 @@ def fabrik_points(P: list[Vec], target: Vec, tol: float, max_iter: int, ops: Ops
     return P, its, err
 
 
-def solve_fabrik(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
-                 max_iter: int, *, limits: list[tuple], record: bool, ops: Ops, done: Any = False
-                 ) -> tuple[list[Quat], list[Vec], History, list]:
+def solve_fabrik(run: ChainRun, options: NoOptions, /) -> ChainSolved:
     """FABRIK: on positions alone for a chain of free ball joints
     (:func:`solve_fabrik_points`, whose own reachability branch answers a ``done`` problem),
     else with the backward pass in joint space (:func:`solve_fabrik_joints`)."""
-    if chain.free_balls and not limits:
-        return solve_fabrik_points(chain, R, base, p0, target, tol, max_iter, record, ops)
-    return solve_fabrik_joints(chain, R, base, p0, target, tol, max_iter, limits, record, ops,
-                               done)
+    if run.chain.free_balls and not run.limits:
+        return solve_fabrik_points(run)
+    return solve_fabrik_joints(run)
 
 
-def solve_fabrik_points(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec,
-                        tol: float, max_iter: int, record: bool, ops: Ops
-                        ) -> tuple[list[Quat], list[Vec], History, list]:
-    """FABRIK on a chain of free ball joints: iterate on positions alone (:func:`fabrik_points`),
-    then fit the rotations once (:func:`fit_chain`; exact, the points keep the bones).
-    ``record`` fits every iteration's points too. Returns the final local rotations, their
-    positions (forward kinematics), the history and the recorded rotations."""
-    Q, P = chain.forward(R, base, p0)
-    R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, [], ops)
+def solve_fabrik_points(run: ChainRun) -> ChainSolved:
+    """FABRIK on a chain of free ball joints (``run.limits`` empty): iterate on positions alone
+    (:func:`fabrik_points`), then fit the rotations once (:func:`fit_chain`; exact, the
+    points keep the bones). ``record`` fits every iteration's points too."""
+    chain, base, p0, target, tol, max_iter, record, ops = (
+        run.chain, run.base, run.p0, run.target, run.tol, run.max_iter, run.record, run.ops)
+    Q, P = chain.forward(run.start, base, p0)
+    R, Q, P = chain.bend_if_straight(run.start, Q, P, base, p0, target, tol, [], ops)
     e = sub(target, P[-1])
     history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops)
-    points: list | None = [] if record else None
-    errors: list = []
-    P_new, its, _ = fabrik_points(ops.copy(P), target, tol, max_iter, ops, points, errors)
+    points: list[Points] = []
+    errors: list[Scalar] = []
+    P_new, its, _ = fabrik_points(ops.copy(P), target, tol, max_iter, ops,
+                                  points if record else None, errors)
     if record and len(points) < np.max(its):  # a stretch: answered before the loop
         points.append(P_new)
     fitted = [fit_chain(chain, R, Q, P, base, f, ops) for f in (points if record else [P_new])]
@@ -386,13 +444,10 @@ def solve_fabrik_points(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
     history.active = ops.full(its, False)
     # Recorded with nothing to iterate (a stretched start already there): the start stays.
     R_new, P = fitted[-1] if fitted else (R, P)
-    return R_new, P, history, [R] + [f for f, _ in fitted] if record else []
+    return ChainSolved(R_new, P, history, [R] + [f for f, _ in fitted] if record else [])
 
 
-def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec,
-                        tol: float, max_iter: int, limits: list[tuple], record: bool,
-                        ops: Ops, done: Any = False
-                        ) -> tuple[list[Quat], list[Vec], History, list]:
+def solve_fabrik_joints(run: ChainRun) -> ChainSolved:
     r"""FABRIK with joint constraints (hinges, limits): forward reaching on the points
     (:func:`reach_forward`), then the backward pass in joint space, root to tip, with the
     parent placed (:math:`Q_{i-1}`, :math:`p_i` by forward kinematics). A ball joint turns its
@@ -404,64 +459,70 @@ def solve_fabrik_joints(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, 
     then projected into its limit. Every iteration ends on a real pose, so its residual is
     honest.
     """
+    chain, base, p0, target, limits, ops = (run.chain, run.base, run.p0, run.target,
+                                            run.limits, run.ops)
     n = len(chain.bones)
     axis_of = dict(zip(chain.variables, chain.axes, strict=True))
     limits_of = {v: [lim for lim in limits if lim[0] == v] for v in chain.variables}
-    Q, P = chain.forward(R, base, p0)
-    R, _, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
+    Q, P = chain.forward(run.start, base, p0)
+    R, _, P = chain.bend_if_straight(run.start, Q, P, base, p0, target, run.tol, limits, ops)
     d, rest = bone_directions(P, ops)
     e = sub(target, P[-1])
-    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops, done=done)
-    frames = [R] if record else []
+    history = History(ops.sqrt(dot(e, e)), run.tol, run.max_iter, ops=ops, done=run.done)
+    frames = [R] if run.record else []
     while ops.any(history.active) and chain.variables:
         reached = reach_forward(P, target, d, rest, ops)
-        new, q, p, P_new = list(R), base, p0, []
+        new, q, p = list(R), base, p0
+        P_new: Points = []
         for i in range(n):  # backward reaching: forward kinematics, aiming every joint
             if i:
                 p = add(p, quat_rotate(q, chain.bones[i]))
             P_new.append(p)
-            if i in axis_of and axis_of[i] is None:  # a ball: its bone at the reached point
-                u = quat_rotate(quat_mul(q, new[i]), chain.bones[i + 1])
-                new[i] = aim(new[i], q, None, u, sub(reached[i + 1], p), ops)
-            elif i in axis_of:  # a hinge: the chain below it as close as it can to its points
-                qj, pj, us, ws = quat_mul(q, new[i]), p, [], []
-                for j in range(i + 1, n):
-                    pj = add(pj, quat_rotate(qj, chain.bones[j]))
-                    qj = quat_mul(qj, new[j])
-                    us.append(sub(pj, p))
-                    ws.append(sub(reached[j], p))
-                new[i] = hinge_turn(new[i], q, axis_of[i], us, ws, ops)
             if i in axis_of:
+                axis = axis_of[i]
+                if axis is None:  # a ball: its bone at the reached point
+                    u = quat_rotate(quat_mul(q, new[i]), chain.bones[i + 1])
+                    new[i] = aim(new[i], q, None, u, sub(reached[i + 1], p), ops)
+                else:  # a hinge: the chain below it as close as it can to its points
+                    qj, pj = quat_mul(q, new[i]), p
+                    us: list[Vec] = []
+                    ws: list[Vec] = []
+                    for j in range(i + 1, n):
+                        pj = add(pj, quat_rotate(qj, chain.bones[j]))
+                        qj = quat_mul(qj, new[j])
+                        us.append(sub(pj, p))
+                        ws.append(sub(reached[j], p))
+                    new[i] = hinge_turn(new[i], q, axis, us, ws, ops)
                 new = chain.project(new, limits_of[i], ops)
             q = quat_mul(q, new[i])
         e_new = sub(target, P_new[-1])
         R, P, e = ops.select(history.active, (new, P_new, e_new), (R, P, e))
         history.update(ops.sqrt(dot(e, e)))
-        if record:
+        if run.record:
             frames.append(R)
-    return R, P, history, frames
+    return ChainSolved(R, P, history, frames)
 
 
 # --------------------------------------------------------------------------- CCD
-def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Vec, tol: float,
-              max_iter: int, *, tip_to_root: bool, max_angle: float | None,
-              limits: list[tuple], record: bool, ops: Ops, done: Any = False
-              ) -> tuple[list[Quat], list[Vec], History, list]:
+def solve_ccd(run: ChainRun, options: CCDOptions, /) -> ChainSolved:
     r"""CCD sweeps, as :func:`.tree_solvers.solve_ccd` on the general model: every joint
     in turn (tip to root, or root to tip) turns the effector direction :math:`e - r_i` towards
     :math:`t - r_i` (:func:`aim`), is projected into its limit, and the chain below it turns
     with it: :math:`p_j \leftarrow r_i + q\,(p_j - r_i)`, :math:`Q_j \leftarrow q\,Q_j` with
     the world turn :math:`q = Q_i' Q_i^{-1}`.
     """
+    chain, base, p0, target, limits, ops = (run.chain, run.base, run.p0, run.target,
+                                            run.limits, run.ops)
+    tip_to_root, max_angle = options.tip_to_root, options.max_angle
     n = len(chain.bones)
     axis_of = dict(zip(chain.variables, chain.axes, strict=True))
     limits_of = {v: [lim for lim in limits if lim[0] == v] for v in chain.variables}
     order = chain.variables[::-1] if tip_to_root else chain.variables
-    Q, P = chain.forward(R, base, p0)
-    R, Q, P = chain.bend_if_straight(R, Q, P, base, p0, target, tol, limits, ops)
+    Q, P = chain.forward(run.start, base, p0)
+    R, Q, P = chain.bend_if_straight(run.start, Q, P, base, p0, target, run.tol, limits, ops)
     e = sub(target, P[-1])
-    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops, done=done)
-    frames = [R] if record else []
+    history = History(ops.sqrt(dot(e, e)), run.tol, run.max_iter, ops=ops, done=run.done)
+    frames = [R] if run.record else []
     while ops.any(history.active) and chain.variables:
         new, Q, P = list(R), list(Q), list(P)
         for v in order:
@@ -480,6 +541,6 @@ def solve_ccd(chain: SerialChain, R: list[Quat], base: Quat, p0: Vec, target: Ve
         Q, P = chain.forward(R, base, p0)
         e = sub(target, P[-1])
         history.update(ops.sqrt(dot(e, e)))
-        if record:
+        if run.record:
             frames.append(R)
-    return R, P, history, frames
+    return ChainSolved(R, P, history, frames)

@@ -21,7 +21,7 @@ from course.rotations._kernels import q_from_axis_angle as quat_from_axis_angle
 from course.rotations._kernels import q_from_rotvec as quat_from_rotvec
 from course.rotations._kernels import q_mul as quat_mul
 from course.rotations._kernels import q_rotate as quat_rotate
-from course.rotations._kernels import q_unit as _unit
+from course.rotations._kernels import q_unit as quat_unit
 from course.rotations._kernels import q_units_like as units_like
 from course.rotations._kernels import v_add as add
 from course.rotations._kernels import v_cross as cross
@@ -34,8 +34,8 @@ Ops = ScalarOps
 __all__ = [
     "Limit", "Ops", "Quat", "Scalar", "Vec", "add", "aim", "cap_angle", "clamp_swing_twist",
     "cross", "dot", "hinge_turn", "limit", "quat_between", "quat_conjugate",
-    "quat_from_axis_angle", "quat_from_rotvec", "quat_mul", "quat_rotate", "scale", "sub",
-    "units_like",
+    "quat_from_axis_angle", "quat_from_rotvec", "quat_mul", "quat_rotate", "quat_unit", "scale",
+    "sub", "units_like",
 ]
 
 
@@ -82,14 +82,14 @@ def aim(R: Quat, parent: Quat, axis: Vec | None, u: Vec, w: Vec, ops: Ops,
     :math:`\mathrm{atan2}(a\cdot(u\times w),\ u\cdot w - (u\cdot a)(w\cdot a))`, so
     :math:`R \leftarrow \exp(\theta\hat a) R`; a ball joint by the shortest arc ``q`` from
     ``u`` to ``w``, a world turn, so :math:`R \leftarrow Q_{i-1}^{-1} q\, Q_{i-1} R`.
-    ``max_angle`` caps the turn. The result is renormalised (:func:`_unit`).
+    ``max_angle`` caps the turn. The result is renormalised (:func:`quat_unit`).
     """
     if axis is not None:
         return hinge_turn(R, parent, axis, [u], [w], ops, max_angle)
     turn = quat_between(u, w, ops)
     if max_angle is not None:
         turn = cap_angle(turn, max_angle, ops)
-    return _unit(quat_mul(quat_mul(quat_conjugate(parent), quat_mul(turn, parent)), R), ops)
+    return quat_unit(quat_mul(quat_mul(quat_conjugate(parent), quat_mul(turn, parent)), R), ops)
 
 
 def hinge_turn(R: Quat, parent: Quat, axis: Vec, us: list[Vec], ws: list[Vec], ops: Ops,
@@ -108,6 +108,6 @@ def hinge_turn(R: Quat, parent: Quat, axis: Vec, us: list[Vec], ws: list[Vec], o
     theta = ops.atan2(num, den)
     if max_angle is not None:
         theta = ops.minimum(ops.maximum(theta, -max_angle), max_angle)
-    return _unit(quat_mul(quat_from_axis_angle(axis, theta, ops), R), ops)
+    return quat_unit(quat_mul(quat_from_axis_angle(axis, theta, ops), R), ops)
 
 

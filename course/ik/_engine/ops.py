@@ -12,12 +12,13 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from course.rotations._kernels import NumpyOps
+from course.rotations._kernels import NumpyOps, Scalar
 
 # A component: a Python float (FLOATS) or an ndarray (B,) (ARRAYS); a flag: a bool or a bool
 # ndarray (B,). Each implementation takes only its own kind, so the protocol leaves them open.
-Component = Any
+Component = Scalar
 Flag = Any
+Components = tuple[Component, ...]  # a vector, quaternion or symmetric 3x3 matrix
 
 
 class Ops(Protocol):
@@ -29,16 +30,16 @@ class Ops(Protocol):
     def cos(self, x: Component, /) -> Component: ...
     def atan2(self, y: Component, x: Component, /) -> Component: ...
     def abs(self, x: Component, /) -> Component: ...
-    def dist(self, a: tuple[Component, ...], b: tuple[Component, ...], /) -> Component: ...
+    def dist(self, a: Components, b: Components, /) -> Component: ...
     def where(self, c: Flag, a: Component, b: Component, /) -> Component: ...
     def select(self, c: Flag, a: Any, b: Any, /) -> Any: ...  # whole structures
     def maximum(self, a: Component, b: Component, /) -> Component: ...
     def minimum(self, a: Component, b: Component, /) -> Component: ...
     def full(self, like: Component, value: Any, /) -> Component: ...
     def flag(self, mask: np.ndarray, /) -> Flag: ...
-    def symmetric(self, A: tuple[Component, ...], /) -> np.ndarray: ...
-    def vector(self, x: np.ndarray, /) -> tuple[Component, ...]: ...
-    def stack(self, items: list[tuple[Component, ...]], batch: int, /) -> np.ndarray: ...
+    def symmetric(self, A: Components, /) -> np.ndarray: ...
+    def vector(self, x: np.ndarray, /) -> Components: ...
+    def stack(self, items: list[Components], batch: int, /) -> np.ndarray: ...
     def both(self, a: Flag, b: Flag, /) -> Flag: ...
     def invert(self, a: Flag, /) -> Flag: ...
     def any(self, a: Flag, /) -> bool: ...
@@ -81,16 +82,16 @@ class _Floats:
         return bool(mask[0])
 
     @staticmethod
-    def symmetric(A: tuple) -> np.ndarray:
+    def symmetric(A: Components) -> np.ndarray:
         a00, a01, a02, a11, a12, a22 = A
         return np.array([[a00, a01, a02], [a01, a11, a12], [a02, a12, a22]])
 
     @staticmethod
-    def vector(x: np.ndarray) -> tuple:
+    def vector(x: np.ndarray) -> Components:
         return tuple(x.tolist())
 
     @staticmethod
-    def stack(items: list[tuple], batch: int) -> np.ndarray:
+    def stack(items: list[Components], batch: int) -> np.ndarray:
         """Tuples of ``c`` floats as an array (len(items), c), with no batch axis.
         (``fromiter`` over the flat floats, told their count: a third cheaper than
         ``np.array`` of the tuples.)"""
@@ -126,10 +127,11 @@ class _Arrays(NumpyOps):
     kernels' :class:`~course.rotations._kernels.NumpyOps`, and what the chain code adds)."""
 
     @staticmethod
-    def dist(a: tuple, b: tuple) -> np.ndarray:
+    def dist(a: Components, b: Components) -> np.ndarray:
         """Distance between two points (components (B,) or floats)."""
         x, y, z = a[0] - b[0], a[1] - b[1], a[2] - b[2]
-        return np.sqrt(x * x + y * y + z * z)
+        d: np.ndarray = np.sqrt(x * x + y * y + z * z)
+        return d
 
     @staticmethod
     def full(like: np.ndarray, value: Any) -> np.ndarray:
@@ -141,17 +143,17 @@ class _Arrays(NumpyOps):
         return mask
 
     @staticmethod
-    def symmetric(A: tuple) -> np.ndarray:
+    def symmetric(A: Components) -> np.ndarray:
         a00, a01, a02, a11, a12, a22 = np.broadcast_arrays(*A)
         return np.stack([np.stack([a00, a01, a02], -1), np.stack([a01, a11, a12], -1),
                          np.stack([a02, a12, a22], -1)], -2)
 
     @staticmethod
-    def vector(x: np.ndarray) -> tuple:
+    def vector(x: np.ndarray) -> Components:
         return tuple(np.moveaxis(x, -1, 0))
 
     @staticmethod
-    def stack(items: list[tuple], batch: int) -> np.ndarray:
+    def stack(items: list[Components], batch: int) -> np.ndarray:
         """Tuples of ``c`` components (B,) or floats as an array (B, len(items), c)."""
         return np.stack([np.stack([np.broadcast_to(c, (batch,)) for c in x], -1)
                          for x in items], 1)

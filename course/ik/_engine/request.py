@@ -1,17 +1,63 @@
-"""A validated solve: what :func:`course.ik.solve` checked, in the form the engines read."""
+"""A validated solve: what :func:`course.ik.solve` checked, in the form the engines read: the
+:class:`Request`, each method's options as a typed record (:class:`JacobianOptions`,
+:class:`CCDOptions`, :class:`TwoLinkOptions`, :class:`NoOptions`), and :class:`Solved`, what
+an engine hands back."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
+
+from numpy.typing import ArrayLike
 
 from course._typing import Array
 
 from .chain import SerialChain
 from .components import Limit
 from .history import History
+from .ops import Flag
 from .tree import TreeModel
+
+JacobianStep = Literal["dls", "pseudo_inverse", "jacobian_transpose"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class JacobianOptions:
+    r"""The Jacobian methods' options (:mod:`course.ik.jacobian`): which step (``method``),
+    DLS's damping :math:`\lambda` (a length), the pseudo-inverse's ``rcond`` cut and the
+    largest joint increment per iteration ``max_step`` (radians)."""
+
+    method: JacobianStep
+    damping: float
+    rcond: float
+    max_step: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class CCDOptions:
+    """CCD's options: the sweep's direction, and the largest turn of a joint per step
+    (radians; None: no cap)."""
+
+    tip_to_root: bool
+    max_angle: float | None
+
+
+@dataclass(frozen=True, kw_only=True)
+class TwoLinkOptions:
+    """The two-link solve's options: a pole point ``(3,)`` or ``(B, 3)`` the middle joint
+    bends towards (None: the way it bends now), and ``flip`` for the other solution."""
+
+    pole: ArrayLike | None
+    flip: bool
+
+
+@dataclass(frozen=True)
+class NoOptions:
+    """The options of a method that takes none (FABRIK)."""
+
+
+MethodOptions = JacobianOptions | CCDOptions | TwoLinkOptions | NoOptions
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -23,7 +69,8 @@ class Request:
     ``pos_t`` and ``rot_t`` map effector joints to their position ``([B,] 3)`` and orientation
     ``([B,] 4)`` targets; ``limits`` holds each variable's :class:`~.components.Limit` (None:
     free) and ``limited`` whether any limits were given at all;
-    ``options`` are the method's options with every default filled in; ``pos_weight`` (E,)
+    ``options`` are the method's options with every default filled in (its record, as its
+    solvers take it); ``pos_weight`` (E,)
     and ``rot_weight`` (E_r,) the targets' relative weights (largest 1); ``reach_start``
     whether a target near the full reach starts from the reach-aware start (:mod:`.reach`).
     """
@@ -47,7 +94,7 @@ class Request:
     tol: float
     max_iter: int
     record: bool
-    options: dict[str, Any]
+    options: MethodOptions
     reach_start: bool = True
 
     def rows(self) -> Iterator[Request]:
@@ -77,6 +124,6 @@ class Solved(NamedTuple):
     root_pos: Array
     positions: Array
     history: History
-    unreachable: Any
+    unreachable: Flag
     frames: list[tuple[Array, Array]] | None
-    reach_start: Any = False
+    reach_start: Flag = False

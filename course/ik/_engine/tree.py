@@ -28,6 +28,7 @@ fixed in the parent's frame, :math:`a_i = Q_{parent} \hat a`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -52,6 +53,10 @@ from course.rotations._kernels import (
 from .components import Limit, limit
 from .ops import ARRAYS
 from .reach import reach_points
+
+# A joint as :func:`build_model` takes it: a hinge's axis (3,), None for a ball (or universal)
+# joint, False for a fixed joint.
+JointAxis = Sequence[float] | Array | bool | None
 
 
 @dataclass
@@ -210,6 +215,13 @@ class TreeModel:
             Jp = np.concatenate([Jp, np.swapaxes(Jr, -1, -2).reshape(B, -1, self.n_cols)], 1)
         return Jp
 
+    def var_axes(self) -> Array:
+        """Hinge axis (in the parent frame) of every variable, (V, 3) (zeros for balls)."""
+        axes = np.zeros((len(self.var_nodes), 3))
+        first = np.searchsorted(self.col_var, np.arange(len(self.var_nodes)))
+        axes[self.hinge] = self.col_axis[first[self.hinge]]
+        return axes
+
     def step(self, Rn: Array, M: Array, base: Array, delta: Array) -> Array:
         r"""Apply the increments ``delta`` (B, C) to the edge rotations.
 
@@ -220,7 +232,7 @@ class TreeModel:
         :math:`R \leftarrow \exp(s\delta[\hat a]_\times) R` (Rodrigues with the fixed
         :math:`[\hat a]_\times`).
         """
-        out = Rn.copy()
+        out: Array = Rn.copy()
         if len(self.hinge_vars):
             nodes = self.var_nodes[self.hinge_vars]
             th = (delta[:, self.hinge_cols] * self.var_sign[self.hinge_vars])[..., None, None]
@@ -239,10 +251,10 @@ class TreeModel:
 def build_model(
     parents: NDArray[np.int_],
     offsets: Array,
-    hinge_axes: list[Array | None],
+    hinge_axes: Sequence[JointAxis],
     root: int,
-    effectors: list[int],
-    rot_effectors: list[int] = (),
+    effectors: Sequence[int],
+    rot_effectors: Sequence[int] = (),
 ) -> TreeModel:
     """Build the :class:`TreeModel` of the paths from ``root`` to ``effectors``.
 
@@ -275,7 +287,9 @@ def build_model(
     )
 
 
-def _reroot(parents: NDArray[np.int_], offsets: Array, root: int, targets: list[int]) -> tuple:
+def _reroot(parents: NDArray[np.int_], offsets: Array, root: int, targets: list[int]
+            ) -> tuple[NDArray[np.int_], dict[int, int], NDArray[np.int_], NDArray[np.bool_],
+                       NDArray[np.int_], Array, dict[int, int]]:
     """The path nodes re-rooted at ``root``, by depth: their joints, the node of each joint,
     re-rooted parents, which edges go up the tree, the joint driving each node, its bone and
     each joint's depth."""
@@ -324,7 +338,7 @@ def _descendants(parent: NDArray[np.int_]) -> tuple[NDArray[np.bool_], Array]:
     return descendant, ancestors
 
 
-def _variables(hinge_axes: list, parent: NDArray[np.int_], up: NDArray[np.bool_],
+def _variables(hinge_axes: Sequence[JointAxis], parent: NDArray[np.int_], up: NDArray[np.bool_],
                edge_joint: NDArray[np.int_], descendant: NDArray[np.bool_],
                eff: NDArray[np.int_], reff: NDArray[np.int_]) -> dict[str, Any]:
     """The variables (the edge rotations that move an effector) and their Jacobian columns,
@@ -332,8 +346,14 @@ def _variables(hinge_axes: list, parent: NDArray[np.int_], up: NDArray[np.bool_]
     N = len(parent)
     # A variable matters if it moves an effector: going down it turns the nodes strictly
     # below it about itself; going up it moves the node itself (about the node it came from).
-    var_nodes, var_sign, var_frame, var_pivot, hinge = [], [], [], [], []
-    col_var, col_axis, col_frame = [], [], []
+    var_nodes: list[int] = []
+    var_sign: list[float] = []
+    var_frame: list[int] = []
+    var_pivot: list[int] = []
+    hinge: list[bool] = []
+    col_var: list[int] = []
+    col_axis: list[Array] = []
+    col_frame: list[int] = []
     for u in range(N):
         if edge_joint[u] < 0 or hinge_axes[edge_joint[u]] is False:
             continue
@@ -476,7 +496,9 @@ def unreachable_targets(model: TreeModel, target_pos: Array, p0: Array) -> NDArr
     """(B,) some position target (B, E, 3) lies outside the shell its effector can reach from
     the fixed joint at ``p0`` (B, 3)."""
     d = norm(target_pos - p0[:, None])
-    return outside_shell(d, model.reach_far, model.reach_near, model.reach_slack).any(axis=1)
+    out: NDArray[np.bool_] = outside_shell(d, model.reach_far, model.reach_near,
+                                           model.reach_slack).any(axis=1)
+    return out
 
 
 @dataclass
@@ -521,7 +543,7 @@ class Problem:
 
     @property
     def batch(self) -> int:
-        return self.Rn.shape[0]
+        return len(self.Rn)
 
     def forward(self, Rn: Array) -> tuple[Array, Array]:
         return self.model.forward(Rn, self.base, self.p0)
@@ -647,7 +669,7 @@ class Problem:
                 hinge = m.hinge[v]
                 if hinge.any():
                     frame = np.where(up[nodes][:, None, None], Mv, Mpar[:, sel])
-                    axis = matvec(frame, self._axes()[v])  # (B, n, 3)
+                    axis = matvec(frame, m.var_axes()[v])  # (B, n, 3)
                     a = axis[:, :, None]
                     if subtree:
                         # The moved nodes' offsets from the pivot, in the node's frame (constant
@@ -675,7 +697,7 @@ class Problem:
             if k and up[lvl].any():  # an up node hangs below its own frame: p_u = p_c - M_u l_c
                 ups = lvl[up[lvl]]
                 p[:, ups] = p[:, m.parent[ups]] - matvec(M[:, ups], m.bone[ups])
-        out = F.copy()
+        out: Array = F.copy()
         out[:, up] = np.swapaxes(F[:, up], -1, -2)
         return out
 
@@ -697,17 +719,9 @@ class Problem:
         M[:, d] = best_rotation(cur, want, m.fit_weight[d]) @ M[:, d]
         frames = np.concatenate([self.base[:, None], M], 1)[:, m.parent[d] + 1]
         F = orthonormalize(np.swapaxes(frames, -1, -2) @ M[:, d])
-        out = Rn.copy()
+        out: Array = Rn.copy()
         out[:, d] = np.where(m.up[d][:, None, None], np.swapaxes(F, -1, -2), F)
         return out
-
-    def _axes(self) -> Array:
-        """Hinge axis (in the parent frame) of every variable, (V, 3) (zeros for balls)."""
-        m = self.model
-        axes = np.zeros((len(m.var_nodes), 3))
-        first = np.searchsorted(m.col_var, np.arange(len(m.var_nodes)))
-        axes[m.hinge] = m.col_axis[first[m.hinge]]
-        return axes
 
     @property
     def limited(self) -> bool:
@@ -719,11 +733,11 @@ class Problem:
         by the fast path's projection (:func:`~course.ik._engine.components.limit`, on the
         quaternions' components): a hinge's angle clipped, a ball's rotation angle capped, a
         swing–twist cone clamped."""
-        todo = [(i, self.limits[int(u)]) for i, u in enumerate(v) if self.limits[int(u)]]
+        todo = [(i, lim) for i, u in enumerate(v) if (lim := self.limits[int(u)]) is not None]
         if not todo:
             return R
         R = R.copy()
         for i, lim in todo:
-            q = tuple(np.moveaxis(quat_from_matrix(R[:, i]), -1, 0))  # components (B,)
-            R[:, i] = matrix_from_quat(np.stack(limit(q, lim, ARRAYS), -1))
+            w, x, y, z = np.moveaxis(quat_from_matrix(R[:, i]), -1, 0)  # components (B,)
+            R[:, i] = matrix_from_quat(np.stack(limit((w, x, y, z), lim, ARRAYS), -1))
         return R

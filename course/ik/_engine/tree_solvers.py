@@ -7,14 +7,15 @@ docstring has the maths), written for a re-rooted tree: CCD turns one variable a
 (Kabsch where several effectors hang below it), FABRIK reaches sub-chains to their sub-bases
 and fits the rotations level by level (:meth:`Problem.fit`), the Jacobian methods step all
 variables at once with the steps of :mod:`course.ik.jacobian`, and the two-link solve places
-the middle joint by the law of cosines (:func:`course.ik.two_link.two_link`). Every solver
-has the signature ``(problem, tol, max_iter, record, **options)`` and returns the final edge
-rotations (B, N, 3, 3), the :class:`History` and the recorded edge rotations.
+the middle joint by the law of cosines (:func:`course.ik.two_link.two_link`). Every solver is
+a :class:`TreeSolver`: it takes the :class:`Problem`, ``tol``, ``max_iter``, ``record`` and
+its method's options record (:mod:`course.ik._engine.request`) and returns a
+:class:`TreeSolved`; :func:`solve_on_tree` runs one on a :class:`Request`.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -37,20 +38,46 @@ from course.rotations._kernels import (
 
 from ..jacobian import dls_step, lost_rank, pinv_step, transpose_step
 from ..two_link import two_link
+from .chain import as_vec
 from .chain_solvers import fabrik_points
 from .history import History
 from .ops import ARRAYS
-from .request import Request, Solved
+from .request import (
+    CCDOptions,
+    JacobianOptions,
+    NoOptions,
+    Request,
+    Solved,
+    TwoLinkOptions,
+)
 from .tree import Problem, TreeModel
 
 # DLS damping when none is given, as a share of the longest path to an effector.
 DEFAULT_DAMPING = 0.05
 
+Options = TypeVar("Options", contravariant=True)
 
-def solve_ccd(
-    problem: Problem, tol: float, max_iter: int, record: bool = False, *,
-    tip_to_root: bool = True, max_angle: float | None = None,
-) -> tuple[Array, History, list[Array]]:
+
+class TreeSolved(NamedTuple):
+    """What a tree solver returns: the final edge rotations ``Rn`` (B, N, 3, 3), the
+    :class:`History`, and the edge rotations before the first and after every iteration
+    (``record``; else empty)."""
+
+    Rn: Array
+    history: History
+    frames: list[Array]
+
+
+class TreeSolver(Protocol[Options]):
+    """A method on the tree model: ``solver(problem, tol, max_iter, record, options) ->
+    TreeSolved``, ``options`` the method's record (:mod:`course.ik._engine.request`)."""
+
+    def __call__(self, problem: Problem, tol: float, max_iter: int, record: bool,
+                 options: Options, /) -> TreeSolved: ...
+
+
+def solve_ccd(problem: Problem, tol: float, max_iter: int, record: bool, options: CCDOptions,
+              /) -> TreeSolved:
     r"""CCD (:mod:`course.ik.ccd`); ``max_angle`` caps each joint's turn per step (radians).
     Limits are enforced by projecting after every joint's turn.
 
@@ -61,15 +88,16 @@ def solve_ccd(
     end-orientation step, exact where that joint moves no position target.
     """
     m = problem.model
+    max_angle = options.max_angle
     Rn = problem.Rn.copy()
     M, p = problem.forward(Rn)
     history = History(problem.error(M, p)[1], tol, max_iter, done=problem.done)
     frames = [Rn.copy()] if record else []
     first_col = np.searchsorted(m.col_var, np.arange(len(m.var_nodes)))
     order = np.arange(len(m.var_nodes))
-    if tip_to_root:
+    if options.tip_to_root:
         order = order[::-1]
-    axes_local = problem._axes()
+    axes_local = m.var_axes()
     last = _last_joints(problem)
     while history.active.any():
         run = history.active[:, None, None]
@@ -106,7 +134,7 @@ def solve_ccd(
         history.update(problem.error(M, p)[1])
         if record:
             frames.append(Rn.copy())
-    return Rn, history, frames
+    return TreeSolved(Rn, history, frames)
 
 
 def _ccd_pairs(problem: Problem, M: Array, p: Array, piv: Array, col: int,
@@ -153,9 +181,8 @@ def _turn(problem: Problem, Rn: Array, M: Array, d: int, R: Array) -> None:
         Rn[:, d] = orthonormalize(np.swapaxes(Mpar, -1, -2) @ R @ Mpar @ Rn[:, d])
 
 
-def solve_fabrik(
-    problem: Problem, tol: float, max_iter: int, record: bool = False
-) -> tuple[Array, History, list[Array]]:
+def solve_fabrik(problem: Problem, tol: float, max_iter: int, record: bool, options: NoOptions,
+                 /) -> TreeSolved:
     """FABRIK (:mod:`course.ik.fabrik`) on any tree of paths, several effectors.
 
     Plain chains of unconstrained ball joints iterate on positions alone and fit rotations
@@ -175,7 +202,8 @@ def solve_fabrik(
             and not len(m.rot_effectors) and len(m.effectors) == 1
             and m.effectors[0] == m.n_nodes - 1 and not record)
     if free:
-        P, errors = p.copy(), []
+        P = p.copy()
+        errors: list[Array] = []
         its, _ = _fabrik_chain(P, problem.target_pos[:, 0], tol, max_iter, errors)
         Rn = problem.fit_free(Rn, P)
         history = History(norm(problem.target_pos - p[:, m.effectors]).max(axis=1), tol, max_iter)
@@ -184,7 +212,7 @@ def solve_fabrik(
         history.residuals += errors[:-1]
         history.residuals.append(problem.error(*problem.forward(Rn))[1])
         history.active[:] = False
-        return Rn, history, []
+        return TreeSolved(Rn, history, [])
 
     history = History(problem.error(*problem.forward(Rn))[1], tol, max_iter, done=problem.done)
     frames = [Rn] if record else []
@@ -195,6 +223,7 @@ def solve_fabrik(
     is_eff[m.effectors] = True
     deepest_first = m.levels[:0:-1]
     held = _held_ends(problem)
+    rows = np.arange(problem.batch)[:, None]  # every problem's row, beside a level's parents
     while history.active.any():
         P = p.copy()
         P[:, m.effectors] = problem.target_pos
@@ -205,7 +234,7 @@ def solve_fabrik(
             fallback /= np.maximum(norm(fallback), TINY)[..., None]
             proposal = _toward(P[:, lvl], P[:, par], lengths[lvl], fallback)
             acc = np.zeros_like(P)
-            np.add.at(acc, (slice(None), par), proposal * pull[lvl][:, None])
+            np.add.at(acc, (rows, par), proposal * pull[lvl][:, None])
             moved = np.unique(par)
             moved = moved[total[moved] > 0]  # sub-bases with a position target below
             keep = moved[is_eff[moved]]
@@ -223,7 +252,7 @@ def solve_fabrik(
         history.update(problem.error(M, p)[1])
         if record:
             frames.append(Rn)
-    return Rn, history, frames
+    return TreeSolved(Rn, history, frames)
 
 
 def _held_ends(problem: Problem) -> list[tuple[int, int, int]]:
@@ -245,7 +274,7 @@ def _orient_ends(problem: Problem, Rn: Array) -> Array:
     orientation's share of the two weights, :math:`w_o / (w_o + w_p)`, of that rotation."""
     m = problem.model
     first_col = np.searchsorted(m.col_var, np.arange(len(m.var_nodes)))
-    axes = problem._axes()
+    axes = m.var_axes()
     Rn = Rn.copy()
     for i, (e, v) in enumerate(zip(m.rot_effectors, _last_joints(problem), strict=True)):
         d = m.var_nodes[v]
@@ -279,48 +308,39 @@ def _toward(frm: Array, to: Array, length: Array, fallback: Array) -> Array:
     if (n < TINY).any():
         d = np.where((n < TINY)[..., None], fallback, d)
         n = np.where(n < TINY, 1.0, n)
-    return frm + (length / n)[..., None] * d
+    out: Array = frm + (length / n)[..., None] * d
+    return out
 
 
 def _fabrik_chain(P: Array, t: Array, tol: float, max_iter: int,
-                  errors: list | None = None) -> tuple[Array, Array]:
+                  errors: list[Array] | None = None) -> tuple[Array, Array]:
     """In-place FABRIK on (B, n, 3) chains; returns iterations and errors, both (B,);
     ``errors``, if given, receives the (B,) errors after every iteration.
 
     Runs :func:`.chain_solvers.fabrik_points` on component-major storage (each coordinate of
     each joint one contiguous (B,) row)."""
     comps = np.array(P.transpose(1, 2, 0))  # (n, 3, B), a copy the solver may write into
-    points, its, err = fabrik_points([tuple(c) for c in comps], tuple(np.array(t.T)), tol,
+    points, its, err = fabrik_points([as_vec(c) for c in comps], as_vec(np.array(t.T)), tol,
                                      max_iter, ARRAYS, errors=errors)
     P[:] = np.moveaxis(np.array(points), -1, 0)
-    return its, err
+    return np.asarray(its), np.asarray(err)
 
 
-def solve_jacobian(
-    problem: Problem, tol: float, max_iter: int, record: bool = False, *, method: str,
-    damping: float | None = None, rcond: float = 1e-6, max_step: float = 0.5,
-) -> tuple[Array, History, list[Array]]:
-    r"""Iterate one Jacobian method of :mod:`course.ik.jacobian` (``method``).
+def solve_jacobian(problem: Problem, tol: float, max_iter: int, record: bool,
+                   options: JacobianOptions, /) -> TreeSolved:
+    r"""Iterate one Jacobian method of :mod:`course.ik.jacobian` (``options.method``).
 
     ``max_step`` caps the largest joint increment per iteration (radians; the step keeps its
     direction), so a far target is approached in several linearised steps. A step that
     increases the objective :math:`\lVert\Delta e\rVert` (all effectors' errors together) is
     undone and the next one halved (backtracking), so it never grows; when it stalls the
-    solve stops (``reason="stalled"``, ``"singular"`` or ``"unreachable"``). ``damping``
-    defaults to 5% of the longest path to an effector (a length, like the errors it is added
-    to).
-
-    Returns
-    -------
-    Rn : ndarray, shape (B, N, 3, 3)
-        Final edge rotations.
-    history : History
-    frames : list of ndarray
-        Edge rotations before the first and after each iteration (``record=True``).
+    solve stops (``reason="stalled"``, ``"singular"`` or ``"unreachable"``). ``damping`` is a
+    length, like the errors it is added to (by default :data:`DEFAULT_DAMPING` of the longest
+    path to an effector, filled in by :func:`course.ik._pipeline.validate`).
     """
     m = problem.model
-    if damping is None:
-        damping = DEFAULT_DAMPING * m.length_scale
+    method, damping, rcond, max_step = (options.method, options.damping, options.rcond,
+                                        options.max_step)
     w = problem.col_weight
     uniform = bool(np.all(w == 1.0))
     Rn = problem.Rn
@@ -368,17 +388,17 @@ def solve_jacobian(
             frames.append(Rn)
     if m.n_cols and not history.converged.all():
         history.singular = lost_rank(m.jacobian(M, p, problem.base), rcond)
-    return Rn, history, frames
+    return TreeSolved(Rn, history, frames)
 
 
-def solve_two_link(problem: Problem, tol: float, max_iter: int, record: bool = False, *,
-                   pole: ArrayLike | None = None, flip: bool = False
-                   ) -> tuple[Array, History, list[Array]]:
+def solve_two_link(problem: Problem, tol: float, max_iter: int, record: bool,
+                   options: TwoLinkOptions, /) -> TreeSolved:
     """The analytic two-bone solve; a start already within ``tol`` is kept (0 iterations),
     and a target the joints cannot reach (out of reach, off a hinge's plane) ends in their
     closest pose, reported ``"unreachable"`` or ``"stalled"`` (never ``"max_iterations"``:
     there is nothing to iterate)."""
     m = problem.model
+    pole, flip = options.pole, options.flip
     if m.n_nodes != 3 or len(m.effectors) != 1 or m.effectors[0] != 2:
         raise ValueError(
             "method: 'two_link' needs the path from root to the one effector to be two bones "
@@ -388,7 +408,7 @@ def solve_two_link(problem: Problem, tol: float, max_iter: int, record: bool = F
     t = problem.target_pos[:, 0]
     hip = np.flatnonzero(m.var_nodes == 0)
     knee = np.flatnonzero(m.var_nodes == 1)
-    axes = problem._axes()
+    axes = m.var_axes()
     both = bool(not m.up.any() and len(hip) and len(knee))
     if both and m.hinge[hip[0]]:
         Rn = _two_link_hinge_hip(problem, p, t, axes[hip[0]],
@@ -402,11 +422,11 @@ def solve_two_link(problem: Problem, tol: float, max_iter: int, record: bool = F
     # With both joints free each aims at its own point (exact: no least-squares compromise).
     Rn = problem.fit(Rn, np.stack([p[:, 0], b, t], 1), subtree=not both)
     if not history.active.any():  # every start within tolerance already: nothing to do
-        return problem.Rn, history, [problem.Rn] if record else []
+        return TreeSolved(problem.Rn, history, [problem.Rn] if record else [])
     Rn = np.where(history.active[:, None, None, None], Rn, problem.Rn)
     history.update(problem.error(*problem.forward(Rn))[1])
     history.stalled = ~history.converged
-    return Rn, history, [problem.Rn, Rn] if record else []
+    return TreeSolved(Rn, history, [problem.Rn, Rn] if record else [])
 
 
 def _two_link_hinge_hip(problem: Problem, p: Array, t: Array, hip_axis: Array,
@@ -501,7 +521,7 @@ def _two_link_hinge_knee(problem: Problem, M: Array, p: Array, t: Array, knee_ax
     return problem.project(Rn), b, c
 
 
-def solve_on_tree(req: Request, solver: Any, iterative: bool = True) -> Solved:
+def solve_on_tree(req: Request, solver: TreeSolver[Any], iterative: bool = True) -> Solved:
     """Run a tree ``solver`` on a request as a batch (one problem: a batch of one, unbatched
     at the end). An ``iterative`` method starts, on a serial chain that can bend evenly, from
     the reach-aware start of :meth:`Problem.reach_start` where its target lies at or near its
@@ -514,7 +534,7 @@ def solve_on_tree(req: Request, solver: Any, iterative: bool = True) -> Solved:
             axis = None if chain.free_balls else np.array(chain.axes[0])
             problem.Rn, reach_start = problem.reach_start(problem.Rn, req.tol, axis)
         problem.Rn = problem.bend_if_straight(problem.Rn, req.tol)
-    Rn, history, frames = solver(problem, req.tol, req.max_iter, req.record, **req.options)
+    Rn, history, frames = solver(problem, req.tol, req.max_iter, req.record, req.options)
     local_b, root_b, Q_k, p_k = base
     pose = _pose(req.skeleton, problem.model, local_b, root_b, Q_k, p_k, Rn)
     recorded = []
@@ -530,8 +550,9 @@ def solve_on_tree(req: Request, solver: Any, iterative: bool = True) -> Solved:
     if not req.batched:  # one problem, solved as a batch of one
         pose = tuple(a[0] for a in pose)
         recorded = [(q[0], p[0]) for q, p in recorded]
-        unreachable, reach_start = unreachable[0], bool(reach_start[0])
         history.unbatch()
+        return Solved(*pose, history, unreachable[0], recorded if req.record else None,
+                      bool(reach_start[0]))
     return Solved(*pose, history, unreachable, recorded if req.record else None, reach_start)
 
 
