@@ -53,7 +53,8 @@ def main() -> None:
         figure_png,
         slerp_arc_figure,
     )
-    from course.viz.scene import FrameScene, SkeletonScene
+    from course.viz.frame_scene import FrameScene
+    from course.viz.scene import SkeletonScene
 
     motion = data.load("cmu_12_01_walk")
     sk = motion.skeleton

@@ -1,4 +1,4 @@
-"""course.viz._backend: which view a student gets, and which thread renders.
+"""course.viz.backend: which view a student gets, and which thread renders.
 
 In JupyterLab 4.6 with ipykernel 7 widget events arrive on a subshell thread while cells and
 the trame server run on the main thread; VTK's OpenGL context must only be used from one of
@@ -17,13 +17,13 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 import pytest
 from tornado.ioloop import IOLoop
 
-from course.viz import _backend
+from course.viz import backend
 
 
 @pytest.fixture
 def kernel_loop(monkeypatch):
     loop = IOLoop(make_current=False)
-    monkeypatch.setattr(_backend, "_kernel_loop", lambda: loop)
+    monkeypatch.setattr(backend, "_kernel_loop", lambda: loop)
     yield loop
     loop.close()
 
@@ -42,7 +42,7 @@ def test_a_render_asked_for_on_a_subshell_runs_on_the_main_thread(kernel_loop):
         return 2 * x
 
     def subshell():
-        answer.append(_backend.on_gl_thread(render, 21))
+        answer.append(backend.on_gl_thread(render, 21))
         kernel_loop.add_callback(kernel_loop.stop)
 
     thread = _from_subshell(subshell)
@@ -57,7 +57,7 @@ def test_a_failing_render_raises_in_the_thread_that_asked(kernel_loop):
 
     def subshell():
         try:
-            _backend.on_gl_thread(lambda: 1 / 0)
+            backend.on_gl_thread(lambda: 1 / 0)
         except ZeroDivisionError as err:
             errors.append(err)
         kernel_loop.add_callback(kernel_loop.stop)
@@ -69,10 +69,10 @@ def test_a_failing_render_raises_in_the_thread_that_asked(kernel_loop):
 
 
 def test_on_the_main_thread_or_outside_a_kernel_it_runs_directly(monkeypatch):
-    assert _backend.on_gl_thread(lambda a, b: a + b, 1, 2) == 3
-    monkeypatch.setattr(_backend, "_kernel_loop", lambda: None)
+    assert backend.on_gl_thread(lambda a, b: a + b, 1, 2) == 3
+    monkeypatch.setattr(backend, "_kernel_loop", lambda: None)
     out = []
-    thread = _from_subshell(lambda: out.append(_backend.on_gl_thread(threading.current_thread)))
+    thread = _from_subshell(lambda: out.append(backend.on_gl_thread(threading.current_thread)))
     thread.join(5)
     assert out[0].name == "subshell"
 
@@ -81,19 +81,19 @@ def test_soon_waits_for_what_the_loop_has_queued_and_outside_a_kernel_runs_now(
         kernel_loop, monkeypatch):
     order = []
     kernel_loop.add_callback(lambda: order.append("picture sent"))
-    _backend.soon(lambda: order.append("plot"))
+    backend.soon(lambda: order.append("plot"))
     assert order == [], "in a kernel it waits for the loop"
     kernel_loop.add_callback(kernel_loop.stop)
     kernel_loop.start()
     assert order == ["picture sent", "plot"]
-    monkeypatch.setattr(_backend, "_kernel_loop", lambda: None)
-    _backend.soon(lambda: order.append("now"))
+    monkeypatch.setattr(backend, "_kernel_loop", lambda: None)
+    backend.soon(lambda: order.append("now"))
     assert order[-1] == "now"
 
 
 def test_a_fast_drag_renders_its_latest_value_not_a_backlog(kernel_loop):
     seen = []
-    observer = _backend.latest_on_gl_thread(
+    observer = backend.latest_on_gl_thread(
         lambda change: seen.append((change, threading.current_thread())))
 
     def subshell():  # 50 slider events before the main thread gets to any of them
@@ -114,7 +114,7 @@ def test_an_error_in_a_queued_handler_is_printed_not_lost(kernel_loop, capsys):
     def broken(_change):
         raise RuntimeError("slider handler failed")
 
-    observer = _backend.latest_on_gl_thread(broken)
+    observer = backend.latest_on_gl_thread(broken)
 
     def subshell():
         observer(1)
@@ -127,22 +127,22 @@ def test_an_error_in_a_queued_handler_is_printed_not_lost(kernel_loop, capsys):
 
 def test_the_backend_is_static_outside_a_kernel_and_the_environment_wins(monkeypatch):
     monkeypatch.delenv("PYVISTA_JUPYTER_BACKEND", raising=False)
-    assert _backend.jupyter_backend() == "static"  # pytest is no kernel
+    assert backend.jupyter_backend() == "static"  # pytest is no kernel
     monkeypatch.setenv("PYVISTA_JUPYTER_BACKEND", "trame")
-    assert _backend.jupyter_backend() == "trame"
+    assert backend.jupyter_backend() == "trame"
     monkeypatch.setenv("PYVISTA_JUPYTER_BACKEND", "none")
-    assert _backend.jupyter_backend() == "static"
+    assert backend.jupyter_backend() == "static"
 
 
 def test_trame_is_kept_from_downloading_its_wasm_bundle(monkeypatch, tmp_path):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.delenv("VTK_WASM_DIR_OVERRIDE", raising=False)
-    _backend.configure_environment()
+    backend.configure_environment()
     wasm = tmp_path / "course-kinematics" / "vtk-wasm"
     assert wasm.is_dir()
     assert os.environ["VTK_WASM_DIR_OVERRIDE"] == str(wasm)
     monkeypatch.setenv("VTK_WASM_DIR_OVERRIDE", "/somewhere/else")  # the user's own wins
-    _backend.configure_environment()
+    backend.configure_environment()
     assert os.environ["VTK_WASM_DIR_OVERRIDE"] == "/somewhere/else"
 
 
@@ -151,25 +151,25 @@ def test_a_kernel_gets_the_browser_rendered_view_unless_the_browser_cannot_reach
 
     monkeypatch.delenv("PYVISTA_JUPYTER_BACKEND", raising=False)
     monkeypatch.delenv("JUPYTERHUB_SERVICE_PREFIX", raising=False)
-    monkeypatch.setattr(_backend, "in_jupyter_kernel", lambda: True)
-    assert _backend.jupyter_backend() == "client"
+    monkeypatch.setattr(backend, "in_jupyter_kernel", lambda: True)
+    assert backend.jupyter_backend() == "client"
     monkeypatch.setitem(sys.modules, "google.colab", object())  # Colab: no port to reach
-    assert _backend.jupyter_backend() == "static"
+    assert backend.jupyter_backend() == "static"
     monkeypatch.delitem(sys.modules, "google.colab")
-    assert _backend.jupyter_backend() == "client"
+    assert backend.jupyter_backend() == "client"
 
 
 def test_an_unknown_backend_is_named_in_the_error(monkeypatch):
     monkeypatch.setenv("PYVISTA_JUPYTER_BACKEND", "webgl")
     with pytest.raises(ValueError, match="PYVISTA_JUPYTER_BACKEND.*'webgl'"):
-        _backend.jupyter_backend()
+        backend.jupyter_backend()
 
 
 _VSCODE_MARKERS = ("VSCODE_PID", "VSCODE_CWD", "VSCODE_IPC_HOOK_CLI", "CODESPACES",
                    "REMOTE_CONTAINERS", "SSH_CONNECTION")
 
 
-@pytest.mark.parametrize("env, backend", [
+@pytest.mark.parametrize("env, expected", [
     ({}, "client"),                                              # JupyterLab on this machine
     ({"VSCODE_PID": "4242"}, "client"),                          # VS Code, local kernel
     ({"VSCODE_PID": "4242", "SSH_CONNECTION": "10.0.0.2 5 10.0.0.3 22"}, "static"),  # Remote-SSH
@@ -179,14 +179,14 @@ _VSCODE_MARKERS = ("VSCODE_PID", "VSCODE_CWD", "VSCODE_IPC_HOOK_CLI", "CODESPACE
     ({"JUPYTERHUB_SERVICE_PREFIX": "/user/ada/"}, "static"),     # a hub too old to probe
     ({"PYVISTA_JUPYTER_BACKEND": "server", "VSCODE_PID": "1", "CODESPACES": "true"}, "server"),
 ])
-def test_the_backend_follows_the_environment_markers(monkeypatch, env, backend):
+def test_the_backend_follows_the_environment_markers(monkeypatch, env, expected):
     for name in (*_VSCODE_MARKERS, "PYVISTA_JUPYTER_BACKEND", "JUPYTERHUB_SERVICE_PREFIX",
                  "JUPYTERHUB_SERVICE_URL"):
         monkeypatch.delenv(name, raising=False)
     for name, value in env.items():
         monkeypatch.setenv(name, value)
-    monkeypatch.setattr(_backend, "in_jupyter_kernel", lambda: True)
-    assert _backend.jupyter_backend() == backend
+    monkeypatch.setattr(backend, "in_jupyter_kernel", lambda: True)
+    assert backend.jupyter_backend() == expected
 
 
 # A JupyterHub single-user server, as the kernel's probe sees it (checked on a real hub by
@@ -229,24 +229,24 @@ def hub_kernel(monkeypatch):
     for name in (*_VSCODE_MARKERS, "PYVISTA_JUPYTER_BACKEND", "JUPYTERHUB_SERVICE_URL"):
         monkeypatch.delenv(name, raising=False)
     monkeypatch.setenv("JUPYTERHUB_SERVICE_PREFIX", "/user/ada/")
-    monkeypatch.setattr(_backend, "in_jupyter_kernel", lambda: True)
-    _backend.hub_serves_proxy.cache_clear()
+    monkeypatch.setattr(backend, "in_jupyter_kernel", lambda: True)
+    backend.hub_serves_proxy.cache_clear()
     yield monkeypatch
-    _backend.hub_serves_proxy.cache_clear()
+    backend.hub_serves_proxy.cache_clear()
 
 
 def test_a_hub_serving_the_proxy_gets_the_client_view_and_is_asked_once(hub_kernel):
     with _single_user_server(proxy=True) as (url, asked):
         hub_kernel.setenv("JUPYTERHUB_SERVICE_URL", url)
-        assert _backend.jupyter_backend() == "client"
-        assert _backend.jupyter_backend() == "client"  # a second view: no second request
-    assert asked == ["/user/ada/" + _backend.HUB_PROXY_PROBE]
+        assert backend.jupyter_backend() == "client"
+        assert backend.jupyter_backend() == "client"  # a second view: no second request
+    assert asked == ["/user/ada/" + backend.HUB_PROXY_PROBE]
 
 
 def test_a_hub_without_the_proxy_gets_static_images(hub_kernel):
     with _single_user_server(proxy=False) as (url, asked):
         hub_kernel.setenv("JUPYTERHUB_SERVICE_URL", url)
-        assert _backend.jupyter_backend() == "static"
+        assert backend.jupyter_backend() == "static"
     assert len(asked) == 1  # it was asked (a 404), not guessed from installed packages
 
 
@@ -254,7 +254,7 @@ def test_on_a_hub_without_the_proxy_the_environment_still_wins(hub_kernel):
     with _single_user_server(proxy=False) as (url, asked):
         hub_kernel.setenv("JUPYTERHUB_SERVICE_URL", url)
         hub_kernel.setenv("PYVISTA_JUPYTER_BACKEND", "client")
-        assert _backend.jupyter_backend() == "client"
+        assert backend.jupyter_backend() == "client"
     assert asked == []
 
 
@@ -263,10 +263,10 @@ def test_a_server_that_does_not_answer_means_no_proxy(hub_kernel):
         closed.bind(("127.0.0.1", 0))
         port = closed.getsockname()[1]
     hub_kernel.setenv("JUPYTERHUB_SERVICE_URL", f"http://127.0.0.1:{port}/user/ada/")
-    assert _backend.jupyter_backend() == "static"
+    assert backend.jupyter_backend() == "static"
     with socket.socket() as silent:  # accepts the connection, never answers: the timeout
         silent.bind(("127.0.0.1", 0))
         silent.listen()
         url = f"http://127.0.0.1:{silent.getsockname()[1]}/user/ada/"
-        assert not _backend.hub_serves_proxy(url)
-    assert not _backend.hub_serves_proxy("not a url")
+        assert not backend.hub_serves_proxy(url)
+    assert not backend.hub_serves_proxy("not a url")

@@ -103,7 +103,7 @@ def test_bvh_player_shows_the_precomputed_frame(sample_motion):
         player.sliders["speed"].value = 2.0
         assert player.pacer.rate == pytest.approx(2 / sample_motion.frame_time)
         # the root's path lies on the floor, under every frame's root
-        path = player.scene._trail.points[:sample_motion.n_frames]
+        path = player.scene.trail.points[:sample_motion.n_frames]
         np.testing.assert_allclose(path[:, [0, 2]], positions[:, 0, [0, 2]])
         assert np.all(path[:, 1] <= positions[..., 1].min() + 1e-9)
     finally:
@@ -508,7 +508,7 @@ def draggable_views(monkeypatch):
 
     from course.viz import scene
 
-    monkeypatch.setattr(scene, "jupyter_backend", lambda: "server")
+    monkeypatch.setenv("PYVISTA_JUPYTER_BACKEND", "server")
     monkeypatch.setattr(scene.SkeletonScene, "widget", lambda self: widgets.HTML())
 
 

@@ -135,7 +135,7 @@ def test_two_skeletons_have_distinct_colours_a_legend_and_a_ground(tmp_path):
         stu = _near(img, sc.project(shifted[1:3]), _rgb(PALETTE[1][1]))
         assert ref.all() and stu.all()
         # the floor sits just under the lowest joint (y = 5), behind and between the feet
-        floor_y = 5.0 - 0.022 * sc._scale
+        floor_y = 5.0 - 0.022 * sc.framing.scale
         for point in ([35.0, floor_y, -30.0], [35.0, floor_y, -60.0]):
             c, r = np.round(sc.project(np.array([point]))[0]).astype(int)
             assert 0 <= r < img.shape[0], "the floor behind the feet is out of view"
@@ -167,7 +167,8 @@ def test_a_faint_ghost_under_a_coincident_pose_leaves_its_joints_clean(ghost_fir
             right = np.cross(cam.up, towards / np.linalg.norm(towards))
             right /= np.linalg.norm(right)
             uv = sc.project(POSE)
-            radius = np.linalg.norm(sc.project(POSE + 0.022 * sc._scale * right) - uv, axis=1)
+            joint = 0.022 * sc.framing.scale * right
+            radius = np.linalg.norm(sc.project(POSE + joint) - uv, axis=1)
             return sc.screenshot().astype(int), uv, radius
         finally:
             sc.close()
@@ -199,7 +200,7 @@ def test_targets_and_trail_update_in_place(scene):
     scene.add_trail(capacity=4)
     for k in range(6):
         scene.push_trail([k, 0, 0])
-    np.testing.assert_allclose(np.asarray(scene._trail.points)[:, 0], [2, 3, 4, 5])
+    np.testing.assert_allclose(np.asarray(scene.trail.points)[:, 0], [2, 3, 4, 5])
     scene.clear_trail()
 
 
@@ -263,9 +264,7 @@ def test_the_target_handle_reports_where_it_is_dragged(scene):
 @pytest.fixture
 def browser_scene(monkeypatch):
     """A scene built as for the client (vtk.js) view, without a trame server."""
-    from course.viz import scene
-
-    monkeypatch.setattr(scene, "jupyter_backend", lambda: "client")
+    monkeypatch.setenv("PYVISTA_JUPYTER_BACKEND", "client")
     s = SkeletonScene(window_size=(320, 240))
     s.add_skeleton(PARENTS, POSE, name="a")
     s.add_skeleton(PARENTS, POSE + [60, 0, 0], name="b")
@@ -285,7 +284,7 @@ def test_a_browser_view_gets_joints_as_a_mesh_that_follows_the_pose(browser_scen
     joints.mapper.GetInputAlgorithm().Update()
     mesh = joints.mapper.GetInput()
     lo, hi = np.array(mesh.GetBounds()).reshape(3, 2).T
-    radius = 0.022 * browser_scene._scale
+    radius = 0.022 * browser_scene.framing.scale
     np.testing.assert_allclose(lo, moved.min(axis=0) - radius, atol=0.05 * radius)
     np.testing.assert_allclose(hi, moved.max(axis=0) + radius, atol=0.05 * radius)
     # the legend, which vtk.js would not draw, is HTML naming both skeletons in their colours
@@ -329,7 +328,7 @@ class _FakeLoop:
 
 
 def test_a_browser_view_publishes_changes_at_once_and_the_whole_scene_when_still():
-    from course.viz.scene import BrowserDraws, _send_changes_only
+    from course.viz.browser_sync import BrowserDraws, send_changes_only
 
     published, full = [], []
 
@@ -338,9 +337,11 @@ def test_a_browser_view_publishes_changes_at_once_and_the_whole_scene_when_still
             return {"window": window, "new": new_state}
 
     class View:
-        _VtkLocalView__view = "window"
-        _helper = Helper()
-        _widgets: list = []
+        module = Helper()
+
+        @staticmethod
+        def get_widgets():
+            return []
 
         class server:  # noqa: N801 (trame's attribute name)
             class protocol:  # noqa: N801
@@ -354,7 +355,7 @@ def test_a_browser_view_publishes_changes_at_once_and_the_whole_scene_when_still
     loop = _FakeLoop()
     view = View()
     draws = BrowserDraws(clock=lambda: loop.now, call_later=loop.call_later)
-    assert _send_changes_only(view, draws)
+    send_changes_only(view, "window", draws)
     view.update()  # no page has shown the scene: it will load the whole state, kept current
     assert full == [1] and not published
     draws.drawn()  # a page shows it: from now on it takes changes
@@ -370,11 +371,10 @@ def test_a_browser_view_publishes_changes_at_once_and_the_whole_scene_when_still
     assert full == [1, 1]
     loop.advance(5.0)
     assert full == [1, 1]
-    assert not _send_changes_only(object()), "a view of another kind is left as it is"
 
 
 def test_browser_draws_hold_back_all_but_the_newest_change_until_the_last_is_drawn():
-    from course.viz.scene import BrowserDraws
+    from course.viz.browser_sync import BrowserDraws
 
     loop = _FakeLoop()
     draws = BrowserDraws(clock=lambda: loop.now, call_later=loop.call_later)
@@ -396,7 +396,7 @@ def test_browser_draws_hold_back_all_but_the_newest_change_until_the_last_is_dra
 
 
 def test_browser_draws_stop_waiting_for_a_browser_that_went_quiet():
-    from course.viz.scene import BrowserDraws
+    from course.viz.browser_sync import BrowserDraws
 
     loop = _FakeLoop()
     draws = BrowserDraws(patience=1.0, clock=lambda: loop.now, call_later=loop.call_later)
@@ -413,18 +413,19 @@ def test_browser_draws_stop_waiting_for_a_browser_that_went_quiet():
 
 
 def test_a_browser_view_sends_a_drag_at_the_pace_the_browser_draws():
-    from course.viz.scene import BrowserDraws, _send_changes_only
+    from course.viz.browser_sync import BrowserDraws, send_changes_only
 
     published = []
 
     class View:
-        _VtkLocalView__view = "window"
-        _widgets: list = []
-
-        class _helper:  # noqa: N801
+        class module:  # noqa: N801 (trame's attribute name)
             @staticmethod
             def scene(window, new_state, widgets, orientation_axis):
                 return {"state": state[0]}
+
+        @staticmethod
+        def get_widgets():
+            return []
 
         class server:  # noqa: N801 (trame's attribute name)
             class protocol:  # noqa: N801
@@ -439,7 +440,7 @@ def test_a_browser_view_sends_a_drag_at_the_pace_the_browser_draws():
     draws = BrowserDraws(clock=lambda: loop.now, call_later=loop.call_later)
     draws.drawn()  # the browser answers
     view, state = View(), [0]
-    assert _send_changes_only(view, draws)
+    send_changes_only(view, "window", draws)
     for k in range(1, 6):  # five renders while the browser draws the first
         state[0] = k
         view.update()
@@ -455,7 +456,7 @@ def _turn(axis, degrees):
 def test_frame_scene_draws_equal_lengths_equally_in_every_frame():
     """A parallel projection: the same axis is as long on screen in each frame, and the
     frames stand on one row (LERP's shorter frame is shorter, not farther away)."""
-    from course.viz.scene import FrameScene
+    from course.viz.frame_scene import FrameScene
 
     sc = FrameScene(3, labels=["LERP", "NLERP", "SLERP"], window_size=(780, 300))
     try:
@@ -499,7 +500,7 @@ ROTATION_SETS = {
     ("random", ["LERP", "NLERP", "SLERP"], (780, 300)),
 ])
 def test_frame_scene_captions_sit_under_their_own_frame_clear_of_every_arrow(case, labels, size):
-    from course.viz.scene import FrameScene
+    from course.viz.frame_scene import FrameScene
 
     rotations = ROTATION_SETS[case][:len(labels)]
     sc = FrameScene(len(labels), labels=labels, window_size=size)

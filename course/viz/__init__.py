@@ -11,12 +11,13 @@ from __future__ import annotations
 from importlib import import_module
 from typing import Any
 
-from ._backend import configure_environment
+from .backend import configure_environment
 
 configure_environment()
 
 _EXPORTS = {
-    "scene": ("SkeletonScene", "FrameScene", "show_skeletons", "PALETTE"),
+    "scene": ("SkeletonScene", "show_skeletons", "PALETTE"),
+    "frame_scene": ("FrameScene",),
     "figures": (
         "ChainPlot",
         "ConvergenceFigure",

@@ -6,20 +6,23 @@ is rebuilt), with its pinned corners as spheres. :class:`ClothSimulator` adds th
 stiffness and time-step sliders, the integrator, play/pause (``widgets.Play``, ticking in the
 browser), single steps and a reset, and a readout with the energy and the Newton statistics
 of each implicit step. As in :mod:`course.viz.controls`, every widget event runs on the GL
-thread (:func:`~course.viz._backend.latest_on_gl_thread`), and setting a widget's value from
+thread (:func:`~course.viz.backend.latest_on_gl_thread`), and setting a widget's value from
 code does what clicking it does.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
 import ipywidgets as widgets
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._backend import configure_environment, latest_on_gl_thread
-from .scene import PALETTE, SkeletonScene, _shade
+from .backend import configure_environment, latest_on_gl_thread
+from .live_view import LiveView, shade
+from .meshes import overwrite
+from .scene import PALETTE
 
 configure_environment()
 
@@ -27,18 +30,20 @@ import pyvista as pv  # noqa: E402  (after the environment is set: VTK reads it 
 from vtkmodules.vtkFiltersCore import vtkPolyDataNormals  # noqa: E402
 from vtkmodules.vtkRenderingCore import vtkPolyDataMapper  # noqa: E402
 
+if TYPE_CHECKING:
+    from course.physics import NewtonStats
+
 Array = NDArray[np.float64]
 
 FRONT, BACK = PALETTE[0][0], PALETTE[0][1]  # blue above, amber below: the fold is readable
 PIN_COLOR = "#e5484d"
 
 
-class ClothScene(SkeletonScene):
+class ClothScene(LiveView):
     """A cloth in 3D, its points overwritten in place by :meth:`set_positions`.
 
-    A :class:`~course.viz.scene.SkeletonScene` without skeletons or floor: the backend choice,
-    rendering, :meth:`widget`, :meth:`show`, :meth:`screenshot` and :meth:`close` are the
-    skeleton scene's.
+    A :class:`~course.viz.live_view.LiveView`: the backend choice, rendering, :meth:`widget`,
+    :meth:`show`, :meth:`screenshot` and :meth:`close` are every scene's.
 
     Parameters
     ----------
@@ -49,7 +54,7 @@ class ClothScene(SkeletonScene):
 
     def __init__(self, cloth: Any, positions: ArrayLike | None = None, *,
                  window_size: tuple[int, int] = (640, 480)) -> None:
-        super().__init__(window_size=window_size, ground=False)
+        super().__init__(window_size)
         x = cloth.positions if positions is None else positions
         faces = np.column_stack([np.full(len(cloth.quads), 4), cloth.quads]).ravel()
         self.mesh = pv.PolyData(self._checked(x, cloth.n_particles).copy(), faces=faces)
@@ -61,7 +66,7 @@ class ClothScene(SkeletonScene):
         mapper.SetInputConnection(normals.GetOutputPort())
         mapper.ScalarVisibilityOff()
         self.actor = pv.Actor(mapper=mapper)
-        _shade(self.actor, FRONT, specular=0.15)
+        shade(self.actor, FRONT, specular=0.15)
         back = pv.Property()
         back.color, back.ambient, back.diffuse = BACK, 0.18, 0.85
         self.actor.backface_prop = back
@@ -89,12 +94,8 @@ class ClothScene(SkeletonScene):
         hi = np.maximum(hi, [hi[0], hi[1], hi[2] + 0.2 * size])
         center, radius = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
         d = np.array([0.8, 0.45, 1.0]) / np.linalg.norm([0.8, 0.45, 1.0])
-        camera = self.plotter.camera
-        camera.view_angle = 30.0
-        camera.focal_point = tuple(center)
-        camera.position = tuple(center + 0.8 * radius / np.sin(np.radians(15.0)) * d)
-        camera.up = (0.0, 1.0, 0.0)
-        self.plotter.renderer.camera_set = True
+        self.plotter.camera.view_angle = 30.0
+        self._look_at(center, center + 0.8 * radius / np.sin(np.radians(15.0)) * d, (0, 1, 0))
 
     @property
     def positions(self) -> Array:
@@ -106,7 +107,7 @@ class ClothScene(SkeletonScene):
         p = self._checked(positions, self.mesh.n_points)
         if not np.all(np.isfinite(p)):
             raise ValueError("positions contains NaN or infinite values")
-        self.mesh.points[:] = p
+        overwrite(self.mesh.points, p)
         self.mesh.GetPoints().Modified()
         self.mesh.Modified()
         if render:
@@ -151,6 +152,7 @@ class ClothSimulator:
         if not speed > 0 or int(max_steps_per_tick) < 1 or int(interval) < 1:
             raise ValueError("speed, max_steps_per_tick and interval must be positive")
         self.speed, self.max_steps_per_tick = float(speed), int(max_steps_per_tick)
+        self.last: NewtonStats | None = None  # the statistics of the last implicit step
         self.scene = ClothScene(cloth, window_size=window_size)
         self.play = widgets.Play(value=0, min=0, max=10**9, step=1, interval=int(interval),
                                  description="play")
@@ -168,7 +170,7 @@ class ClothSimulator:
         self.readout = widgets.HTML(layout=widgets.Layout(width=width, min_width=width))
         self.play.observe(latest_on_gl_thread(lambda _c: self.tick()), names="value")
         self.sliders["stiffness"].observe(
-            latest_on_gl_thread(lambda c: self._set_stiffness(c["new"])), names="value")
+            latest_on_gl_thread(self._stiffness_changed), names="value")
         for name in ("h", "method"):  # (h changes the steps per tick: shown)
             self.sliders[name].observe(latest_on_gl_thread(lambda _c: self._show()),
                                        names="value")
@@ -190,8 +192,8 @@ class ClothSimulator:
 
         display(self.widget)
 
-    def _set_stiffness(self, k: float) -> None:
-        self.cloth = self.base.with_stiffness(k)
+    def _stiffness_changed(self, change: Mapping[str, float]) -> None:
+        self.cloth = self.base.with_stiffness(change["new"])
         self._show()
 
     def reset(self) -> None:
@@ -212,7 +214,7 @@ class ClothSimulator:
     @property
     def playback_speed(self) -> float:
         """Simulated seconds per real second while playing (1.0: real time)."""
-        return self.steps_per_tick * self.sliders["h"].value / (self.play.interval / 1000)
+        return float(self.steps_per_tick * self.sliders["h"].value / (self.play.interval / 1000))
 
     def tick(self) -> None:
         """What one tick of play does: :attr:`steps_per_tick` steps, drawn once."""

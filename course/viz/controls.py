@@ -19,22 +19,18 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import Array
-from ._backend import latest_on_gl_thread, soon
+from .backend import latest_on_gl_thread, soon
 from .figures import ConvergenceFigure, GimbalFigure, JointAngleFigure, SlerpArcFigure
-from .scene import GHOST, FrameScene, SkeletonScene
-
-
-def _slider_style(readout_format: str = ".0f") -> dict[str, Any]:
-    """Common slider options (a fresh Layout each time: widgets must not share one)."""
-    return {"continuous_update": True, "readout_format": readout_format,
-            "style": {"description_width": "80px"}, "layout": widgets.Layout(width="340px")}
+from .frame_scene import FrameScene
+from .panel import fixed_height, on_value, readout_box, slider_style
+from .scene import GHOST, SkeletonScene
 
 
 def _angle_slider(description: str, value: float = 0.0, limit: float = 180.0
                   ) -> widgets.FloatSlider:
     """A slider in degrees (what students read); the math converts to radians."""
     return widgets.FloatSlider(value=value, min=-limit, max=limit, step=1.0,
-                               description=description, **_slider_style())
+                               description=description, **slider_style())
 
 
 def _set_sliders(sliders: dict[str, widgets.Widget], position: Array) -> None:
@@ -60,7 +56,7 @@ def _snapped(slider: widgets.Widget, old: float, new: float) -> bool:
     if not step:
         return False
     n = (new - slider.min) / step
-    return abs(new - old) <= step / 2 * (1 + 1e-9) and abs(n - round(n)) < 1e-6
+    return bool(abs(new - old) <= step / 2 * (1 + 1e-9) and abs(n - round(n)) < 1e-6)
 
 
 def _side_by_side(*children: widgets.Widget) -> widgets.HBox:
@@ -73,28 +69,6 @@ def _side_by_side(*children: widgets.Widget) -> widgets.HBox:
             child.layout.margin = "0 12px 0 0"
     return widgets.HBox(list(children), layout=widgets.Layout(
         align_items="flex-start", flex_flow="row wrap", width="100%"))
-
-
-def _readout(lines: int, width: str | None = None) -> widgets.HTML:
-    """An HTML readout whose height is reserved for ``lines`` lines: a longer or shorter
-    text never moves the view or the controls below it (it scrolls instead). Without a
-    ``width`` it spans its panel."""
-    height = f"{1.75 * lines + 0.4:.2f}em"
-    return widgets.HTML(layout=widgets.Layout(height=height, min_height=height, width=width,
-                                              overflow="auto", flex="0 0 auto"))
-
-
-def _fixed(widget: widgets.Widget, height: str = "32px") -> widgets.Widget:
-    """A button or row that a panel of limited height never squashes."""
-    widget.layout.height = height
-    widget.layout.min_height = height
-    widget.layout.flex = "0 0 auto"
-    return widget
-
-
-def _on_value(widget: widgets.Widget, handler: Any) -> None:
-    """Call ``handler(change)`` when ``widget.value`` changes, on the thread that renders."""
-    widget.observe(latest_on_gl_thread(handler), names="value")
 
 
 def _number(x: float, fmt: str = "+.3f") -> str:
@@ -167,8 +141,8 @@ class RotationExplorer(Control):
                                       description="order", layout=widgets.Layout(width="200px"))
         self.sliders = {f"angle{k}": _angle_slider(f"angle {k + 1}", v)
                         for k, v in enumerate(a_deg)}
-        self.readout = _readout(9)  # the matrix rows are taller than a line of text
-        self.warning = _readout(4)  # reserved: the lock warning never moves the views
+        self.readout = readout_box(9)  # the matrix rows are taller than a line of text
+        self.warning = readout_box(4)  # reserved: the lock warning never moves the views
         self.scene = FrameScene(1, window_size=(380, 340))
         self.gimbal = GimbalFigure(order, np.radians(a_deg))
         self.gimbal_image = widgets.Image(format="png", width=340)
@@ -176,7 +150,7 @@ class RotationExplorer(Control):
                                 layout=widgets.Layout(width="350px"))
         self.widget = _side_by_side(controls, self.scene.widget(), self.gimbal_image)
         for w in (self.order, *self.sliders.values()):
-            _on_value(w, self._changed)
+            on_value(w, self._changed)
         self._changed()
 
     @property
@@ -240,10 +214,10 @@ class SlerpExplorer(Control):
             **{f"end{k}": _angle_slider(f"end {c}", v) for k, (c, v) in
                enumerate(zip("XYZ", np.ravel(end), strict=True))},
             "t": widgets.FloatSlider(value=t, min=0.0, max=1.0, step=0.01, description="t",
-                                     **_slider_style(".2f")),
+                                     **slider_style(".2f")),
         }
         # room for the table: a row per method, readable columns
-        self.readout = _readout(6, "470px")
+        self.readout = readout_box(6, "470px")
         self.scene = FrameScene(3, labels=["LERP", "NLERP", "SLERP"], window_size=(780, 300))
         self.q0, self.q1 = self._ends()
         self.arc = SlerpArcFigure(self.q0, self.q1, t=t)
@@ -253,7 +227,7 @@ class SlerpExplorer(Control):
         self.widget = widgets.VBox([self.scene.widget(), _side_by_side(
             widgets.VBox(list(self.sliders.values())), self.readout, self.arc_image)])
         for name, s in self.sliders.items():
-            _on_value(s, self._changed_t if name == "t" else self._changed_ends)
+            on_value(s, self._changed_t if name == "t" else self._changed_ends)
         self._show()
 
     def _ends(self) -> tuple[Array, Array]:
@@ -357,16 +331,16 @@ class FKExplorer(Control):
             for k, a in enumerate(ax):
                 label = "xyz"[int(np.argmax(np.abs(a)))] if np.count_nonzero(a) == 1 else f"a{k}"
                 s = _angle_slider(label, 0.0, limit)
-                _on_value(s, lambda _c, j=j: self._changed(j))
+                on_value(s, lambda _c, j=j: self._changed(j))
                 self.sliders[f"{skeleton.names[j]}.{k}"] = s
                 row.append(s)
             groups.append(widgets.VBox(row))
             titles.append(skeleton.names[j])
         self.accordion = widgets.Accordion(children=groups, titles=tuple(titles),
                                            selected_index=0 if groups else None)
-        self.reset_button = _fixed(widgets.Button(description="reset", icon="undo"))
+        self.reset_button = fixed_height(widgets.Button(description="reset", icon="undo"))
         self.reset_button.on_click(latest_on_gl_thread(lambda _b: self.reset()))
-        self.readout = _readout(4)  # R_j, Q_j, p_j: lines with subscripts are taller
+        self.readout = readout_box(4)  # R_j, Q_j, p_j: lines with subscripts are taller
         self.positions, self.orientations = skeleton.forward_kinematics(
             self.local_rotations, self.root_position)
         # frame the whole reach (the pose can turn anywhere), not just this pose
@@ -466,7 +440,7 @@ class BVHPlayer(Control):
                  call_later: Callable[[float, Callable[[], None]], Any] | None = None) -> None:
         import time
 
-        from ._backend import call_later as kernel_call_later
+        from .backend import call_later as kernel_call_later
         from .playback import PlaybackPacer
 
         self.motion = motion
@@ -480,13 +454,13 @@ class BVHPlayer(Control):
         self._call_later = call_later or kernel_call_later
         self.frame = 0
         self._run = 0  # which press of play the pending picture belongs to
-        self.play = _fixed(widgets.ToggleButton(value=False, description="play", icon="play",
+        self.play = fixed_height(widgets.ToggleButton(value=False, description="play", icon="play",
                                                 tooltip="play / pause",
                                                 layout=widgets.Layout(width="96px")))
         self.play.add_class("course-play")
         self.sliders = {
             "frame": widgets.IntSlider(value=0, min=0, max=n - 1, description="frame",
-                                       **_slider_style("d")),
+                                       **slider_style("d")),
             "speed": widgets.Dropdown(options=[0.25, 0.5, 1.0, 2.0], value=1.0,
                                       description="speed", layout=widgets.Layout(width="160px")),
             "loop": widgets.Checkbox(value=True, description="loop"),
@@ -494,7 +468,7 @@ class BVHPlayer(Control):
                                        value=camera, description="camera",
                                        layout=widgets.Layout(width="200px")),
         }
-        self.readout = _readout(1)
+        self.readout = readout_box(1)
         # with curves under it the view is lower: the player fits a 1366x768 window
         self.scene = SkeletonScene(window_size=(720, 380 if curves else 480), camera="iso")
         self.name = name or motion.name or "motion"
@@ -518,11 +492,11 @@ class BVHPlayer(Control):
                                            figsize=(7.2, 1.8))
             self.curves_image = widgets.Image(format="png", width=720)
         # playback sets the slider to the frame it shows: that is no new frame to draw
-        _on_value(self.sliders["frame"],
+        on_value(self.sliders["frame"],
                   lambda c: None if c["new"] == self.frame else self.show_frame(c["new"]))
-        _on_value(self.sliders["speed"], lambda c: setattr(self.pacer, "speed", c["new"]))
-        _on_value(self.sliders["camera"], lambda c: self.scene.set_camera(c["new"], render=True))
-        _on_value(self.play, lambda c: self._play_toggled(c["new"]))
+        on_value(self.sliders["speed"], lambda c: setattr(self.pacer, "speed", c["new"]))
+        on_value(self.sliders["camera"], lambda c: self.scene.set_camera(c["new"], render=True))
+        on_value(self.play, lambda c: self._play_toggled(c["new"]))
         row = widgets.HBox([self.play, self.sliders["frame"], self.sliders["speed"],
                             self.sliders["loop"], self.sliders["camera"]],
                            layout=widgets.Layout(flex_flow="row wrap", align_items="center"))
@@ -578,7 +552,7 @@ class BVHPlayer(Control):
             self.scene.set_targets(self.targets[self.frame], render=False)
         self.scene.set_pose(self.positions[self.frame], name=self.name)
         self._show_readout()
-        if self.curves is not None:
+        if self.curves is not None and self.curves_image is not None:
             self.curves.set_frame(self.frame)
             self.curves_image.value = self.curves.png()
 
@@ -746,21 +720,21 @@ class IKPlayground(Control):
         self.sliders = {
             **{c: widgets.FloatSlider(value=goal[k], min=center[k] - reach, max=center[k] + reach,
                                       step=reach / 200, description=f"target {c}",
-                                      **_slider_style(".2f"))
+                                      **slider_style(".2f"))
                for k, c in enumerate("xyz")},
             "method": widgets.Dropdown(options=list(methods), value=method,
                                        description="method", layout=widgets.Layout(width="260px")),
             "tol": widgets.FloatLogSlider(value=tol, base=10, min=-8, max=-1, step=0.5,
                                           description="tolerance",
-                                          **_slider_style(".0e")),
+                                          **slider_style(".0e")),
             "max_iter": widgets.IntSlider(value=max_iter, min=1, max=500, description="max iter",
-                                          **_slider_style("d")),
+                                          **slider_style("d")),
             "iteration": widgets.IntSlider(value=0, min=0, max=0, description="iteration",
-                                           **_slider_style("d")),
+                                           **slider_style("d")),
         }
         # the target (the sliders show it, rounded to their steps by the browser)
-        self._goal = np.array([self.sliders[c].value for c in "xyz"])
-        self.readout = _readout(5, "360px")  # a long method name wraps the first line
+        self._goal: Array = np.array([self.sliders[c].value for c in "xyz"], dtype=np.float64)
+        self.readout = readout_box(5, "360px")  # a long method name wraps the first line
         self.scene = SkeletonScene(window_size=(640, 500), camera=_facing(normal) or "iso")
         # framed: the chain's reach and the first target (which may lie beyond it)
         self.scene.add_skeleton(skeleton.parents, start_pos, name="start", color=GHOST,
@@ -779,10 +753,10 @@ class IKPlayground(Control):
         self.drag = None if self.handle is not None else _drag_pad(
             self.scene, center, reach, goal, self._dragged, size=96, normal=normal)
         for k, name in enumerate("xyz"):
-            _on_value(self.sliders[name], lambda c, k=k: self._slider_moved(k, c["new"]))
+            on_value(self.sliders[name], lambda c, k=k: self._slider_moved(k, c["new"]))
         for name in ("method", "tol", "max_iter"):
-            _on_value(self.sliders[name], lambda _c: self.solve(plot_later=True))
-        _on_value(self.sliders["iteration"], lambda c: self.show_iteration(c["new"]))
+            on_value(self.sliders[name], lambda _c: self.solve(plot_later=True))
+        on_value(self.sliders["iteration"], lambda c: self.show_iteration(c["new"]))
         sliders = list(self.sliders.values())
         left = widgets.VBox([*_beside_pad(sliders[:3], self.drag), *sliders[3:], self.readout,
                              self.convergence_image])
@@ -792,7 +766,7 @@ class IKPlayground(Control):
     @property
     def target(self) -> Array:
         """The target ``(3,)`` the solve aims at."""
-        return self._goal.copy()
+        return np.array(self._goal, dtype=np.float64)  # a copy
 
     def _slider_moved(self, k: int, value: float) -> None:
         """Target slider ``k`` moved to ``value``: move the target there and solve (not for
@@ -834,6 +808,7 @@ class IKPlayground(Control):
         except ValueError as err:  # e.g. two_link on a longer chain: say why, keep the view
             self.readout.value = f"<span style='color:#a4161a'>{err}</span>"
             return
+        assert self.result.frames is not None  # record=True keeps them
         self.frames = np.array([f["positions"] for f in self.result.frames], dtype=np.float64)
         self.scene.set_targets(self.target[None], render=False)
         it = self.sliders["iteration"]
@@ -870,7 +845,7 @@ class IKPlayground(Control):
         state = "converged" if r.converged else f"not converged ({r.reason})"
         self.readout.value = (
             f"<b>{self.sliders['method'].value}</b>: {state} in "
-            f"<b>{_iterations(r.iterations)}</b><br>residual at iteration {k}: "
+            f"<b>{_iterations(int(r.iterations))}</b><br>residual at iteration {k}: "
             f"<b>{residual[min(k, residual.size - 1)]:.2e}</b> "
             f"(final {residual[-1]:.2e})"
             + _start_note(r)
@@ -941,9 +916,9 @@ class FullBodyIK(Control):
                                        description="method"),
             **{c: widgets.FloatSlider(value=start[k], min=lo[k], max=hi[k],
                                       step=height / 200, description=f"target {c}",
-                                      **_slider_style(".1f")) for k, c in enumerate("xyz")},
+                                      **slider_style(".1f")) for k, c in enumerate("xyz")},
         }
-        self.readout = _readout(4, f"{self.PANEL_WIDTH}px")
+        self.readout = readout_box(4, f"{self.PANEL_WIDTH}px")
         self.stale = False
         self.scene = SkeletonScene(window_size=(640, 520))
         corners = np.stack(np.meshgrid(*box.T, indexing="ij"), axis=-1).reshape(-1, 3)
@@ -962,12 +937,12 @@ class FullBodyIK(Control):
             self.scene, box.mean(axis=0), None, self.targets[effectors[0]], self._dragged,
             size=self.PAD_SIZE, normal=np.eye(3)[0 if toward[0] > toward[2] else 2],
             box=np.ptp(box, axis=0) / 2)
-        _on_value(self.sliders["effectors"], lambda _c: self._effectors_changed())
-        _on_value(self.sliders["edit"], lambda _c: self._load_target())
+        on_value(self.sliders["effectors"], lambda _c: self._effectors_changed())
+        on_value(self.sliders["edit"], lambda _c: self._load_target())
         for k in ("root", "method"):
-            _on_value(self.sliders[k], lambda _c: self.solve())
-        for k, c in enumerate("xyz"):
-            _on_value(self.sliders[c], lambda ch, k=k: self._target_moved(k, ch["new"]))
+            on_value(self.sliders[k], lambda _c: self.solve())
+        for axis, c in enumerate("xyz"):
+            on_value(self.sliders[c], lambda ch, axis=axis: self._target_moved(axis, ch["new"]))
         # the x/y/z sliders are offsets from the captured root joint (not world coordinates)
         origin = widgets.HTML(f"target, from the captured <b>{sk.names[0]}</b>:",
                               layout=widgets.Layout(margin="2px 0 0 8px"))
@@ -1065,7 +1040,7 @@ class FullBodyIK(Control):
         self.readout.value = (
             f"root <b>{self.sliders['root'].value}</b>, {len(chosen)} effector(s): "
             f"{'converged' if r.converged else f'not converged ({r.reason})'}, "
-            f"{_iterations(r.iterations)}, residual {residual[-1]:.2e}"
+            f"{_iterations(int(r.iterations))}, residual {residual[-1]:.2e}"
         )
 
 

@@ -109,7 +109,7 @@ class ViewPlaneDrag:
     def __init__(self, camera: Any, center: ArrayLike, half: float | None, position: ArrayLike,
                  on_drag: Callable[[Array], None], *, size: int = 180,
                  normal: ArrayLike | None = None, box: ArrayLike | None = None) -> None:
-        from ._backend import latest_on_gl_thread
+        from .backend import latest_on_gl_thread
 
         if box is None and not (half is not None and half > 0):
             raise ValueError(f"half must be positive, got {half!r}")

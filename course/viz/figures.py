@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
 from .._typing import Array
-from ._backend import png_bytes
+from .backend import png_bytes
 
 BONE = "#3d7dca"
 JOINT = "#ffb000"

@@ -20,8 +20,9 @@ import ipywidgets as widgets
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._backend import configure_environment, latest_on_gl_thread
-from .scene import PALETTE, SkeletonScene, _shade
+from .backend import configure_environment, latest_on_gl_thread
+from .live_view import LiveView, shade
+from .scene import PALETTE
 
 configure_environment()
 
@@ -42,11 +43,11 @@ def _quat_matrix(q: Array) -> Array:
     return np.asarray(matrix_from_quat(q), dtype=np.float64)
 
 
-class RigidBodyScene(SkeletonScene):
+class RigidBodyScene(LiveView):
     """A rigid body's boxes in 3D, moved in place by :meth:`set_state`.
 
-    A :class:`~course.viz.scene.SkeletonScene` without skeletons: rendering, :meth:`widget`,
-    :meth:`show`, :meth:`screenshot` and :meth:`close` are the skeleton scene's.
+    A :class:`~course.viz.live_view.LiveView`: rendering, :meth:`widget`, :meth:`show`,
+    :meth:`screenshot` and :meth:`close` are every scene's.
 
     Parameters
     ----------
@@ -63,7 +64,7 @@ class RigidBodyScene(SkeletonScene):
         if points.ndim != 2 or len(points) == 0 or len(points) % 8:
             raise ValueError(f"body.points: expected the corners of boxes, 8 per box, got "
                              f"shape {points.shape}")
-        super().__init__(window_size=window_size, ground=False)
+        super().__init__(window_size)
         self.body_points = points
         n_boxes = len(points) // 8
         faces = (_FACES[None] + 8 * np.arange(n_boxes)[:, None, None]).reshape(-1, 4)
@@ -71,7 +72,7 @@ class RigidBodyScene(SkeletonScene):
         self.mesh = pv.PolyData(points.copy(), faces=cells)
         self.actor = self.plotter.add_mesh(self.mesh, color=BODY_COLOR, reset_camera=False,
                                            pickable=False, show_edges=True, edge_color="#1f4f85")
-        _shade(self.actor, BODY_COLOR, specular=0.25)
+        shade(self.actor, BODY_COLOR, specular=0.25)
         if floor:
             plane = pv.Plane(center=(0.0, 0.0, 0.0), direction=(0.0, 1.0, 0.0),
                              i_size=4 * radius, j_size=4 * radius)
@@ -80,12 +81,8 @@ class RigidBodyScene(SkeletonScene):
 
     def _aim(self, center: Array, radius: float) -> None:
         d = np.array([0.8, 0.55, 1.0]) / np.linalg.norm([0.8, 0.55, 1.0])
-        camera = self.plotter.camera
-        camera.view_angle = 30.0
-        camera.focal_point = tuple(center)
-        camera.position = tuple(center + radius / np.sin(np.radians(15.0)) * d)
-        camera.up = (0.0, 1.0, 0.0)
-        self.plotter.renderer.camera_set = True
+        self.plotter.camera.view_angle = 30.0
+        self._look_at(center, center + radius / np.sin(np.radians(15.0)) * d, (0, 1, 0))
 
     @property
     def positions(self) -> Array:

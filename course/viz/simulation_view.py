@@ -23,7 +23,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import Array
-from .controls import Control, _fixed, _on_value, _readout, _slider_style
+from .controls import Control
+from .panel import fixed_height, on_value, readout_box, slider_style
 from .scene import GHOST, SkeletonScene
 
 #: steps a slider offers (s): 1/1200 .. 1/60
@@ -65,7 +66,7 @@ class SimulationView(Control):
                              f"(1/1200 .. 1/60 s), got {h!r}")
         if not 2 <= int(n_frames):
             raise ValueError(f"n_frames: at least 2, got {n_frames!r}")
-        from ._backend import call_later as kernel_call_later
+        from .backend import call_later as kernel_call_later
 
         self.character = character
         self.clip = clip[: min(int(n_frames), clip.n_frames)]
@@ -89,19 +90,19 @@ class SimulationView(Control):
 
         self.sliders = {
             "kp": widgets.FloatLogSlider(value=kp, base=10, min=1, max=5, step=0.05,
-                                         description="kp", **_slider_style(".3g")),
+                                         description="kp", **slider_style(".3g")),
             "kd": widgets.FloatSlider(value=kd, min=0.0, max=100.0, step=0.1,
-                                      description="kd", **_slider_style(".1f")),
+                                      description="kd", **slider_style(".1f")),
             "h": widgets.Dropdown(options=[(f"1/{round(1 / s)} s", s) for s in STEPS], value=h,
                                   description="h", layout=widgets.Layout(width="200px")),
             "push": widgets.FloatSlider(value=push, min=0.0, max=1000.0, step=10.0,
-                                        description="push (N)", **_slider_style(".0f")),
+                                        description="push (N)", **slider_style(".0f")),
             "hold_root": widgets.Checkbox(value=hold_root, description="hold the root"),
             "stable_pd": widgets.Checkbox(value=stable_pd, description="stable PD"),
         }
         for s in self.sliders.values():
             s.continuous_update = False  # one run per release, not one per pixel dragged
-        self.readout = _readout(2)
+        self.readout = readout_box(2)
         parents = clip.skeleton.parents
         self.scene = SkeletonScene(window_size=WINDOW, camera="iso")
         p0 = self.clip_positions[0]
@@ -110,8 +111,8 @@ class SimulationView(Control):
         self.scene.add_skeleton(parents, p0 + self.offset, name="simulated")
         self.scene.set_camera("iso")
         for s in self.sliders.values():
-            _on_value(s, lambda _c: self.simulate())
-        self.button = _fixed(widgets.Button(description="simulate again", icon="play",
+            on_value(s, lambda _c: self.simulate())
+        self.button = fixed_height(widgets.Button(description="simulate again", icon="play",
                                             layout=widgets.Layout(width="160px")))
         self.button.on_click(lambda _b: self.simulate())
         # the controls beside the view, as notebook 13's: the whole fits a 1366x768 window

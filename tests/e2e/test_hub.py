@@ -46,7 +46,7 @@ from labkit import (
     webgl_drawn,
 )
 
-from course.viz._backend import HUB_PROXY_PROBE
+from course.viz.backend import HUB_PROXY_PROBE
 
 HERE = Path(__file__).resolve().parent
 NOTEBOOK = HERE / "e2e_views.ipynb"

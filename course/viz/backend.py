@@ -36,7 +36,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 
-def _headless() -> bool:
+def headless() -> bool:
     """True on Linux without an X11/Wayland display (CI containers, remote kernels)."""
     return sys.platform.startswith("linux") and not (
         os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
@@ -64,7 +64,7 @@ def configure_environment() -> None:
         os.environ.setdefault("VTK_WASM_DIR_OVERRIDE", str(wasm_dir))
     except OSError:  # read-only home: trame then falls back to its own cache
         pass
-    if _headless():
+    if headless():
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
         os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 
@@ -155,7 +155,7 @@ def _vscode_remote() -> bool:
 def off_screen() -> bool:
     """Render without a window: in a kernel (trame renders in the kernel too) or headless."""
     flag = os.environ.get("PYVISTA_OFF_SCREEN", "").strip().lower() in ("1", "true", "yes")
-    return flag or in_jupyter_kernel() or _headless()
+    return flag or in_jupyter_kernel() or headless()
 
 
 T = TypeVar("T")
