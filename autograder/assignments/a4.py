@@ -47,20 +47,22 @@ ITERATIONS = 100
 
 
 def _norm(v: np.ndarray) -> np.ndarray:
-    return np.linalg.norm(v, axis=-1)
+    norm: np.ndarray = np.linalg.norm(v, axis=-1)
+    return norm
 
 
 def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Angle between unit quaternions (either sign), radians."""
     dot = np.abs(np.sum(a * b, axis=-1)) / (_norm(a) * _norm(b))
-    return 2 * np.arccos(np.clip(dot, -1.0, 1.0))
+    angle: np.ndarray = 2 * np.arccos(np.clip(dot, -1.0, 1.0))
+    return angle
 
 
-def _names(parents) -> list[str]:
+def _names(parents: np.ndarray) -> list[str]:
     return [f"joint{j}" for j in range(len(parents))]
 
 
-def goes_up(parents, fixed: int, effector: int) -> bool:
+def goes_up(parents: np.ndarray, fixed: int, effector: int) -> bool:
     """Whether the path leaves the fixed joint upwards (the effector is not below it)."""
     return fixed not in tree_path(parents, effector, 0)
 
@@ -68,7 +70,7 @@ def goes_up(parents, fixed: int, effector: int) -> bool:
 # --- judging an IK answer ----------------------------------------------------------------------
 
 
-def path_length(parents, offsets, fixed: int, effector: int) -> float:
+def path_length(parents: np.ndarray, offsets: np.ndarray, fixed: int, effector: int) -> float:
     path = tree_path(np.asarray(parents), fixed, effector)
     return float(sum(_norm(offsets[max(a, b)]) for a, b in zip(path, path[1:], strict=False)))
 
@@ -96,13 +98,13 @@ class IKCase(NamedTuple):
         """The path's length, the unit of the case's tolerances."""
         return path_length(self.parents, self.offsets, self.fixed, self.effector)
 
-    def fk(self, quats) -> tuple[np.ndarray, np.ndarray]:
+    def fk(self, quats: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World positions and orientations for the local rotations ``quats``, joint 0 at
         the root position."""
         return ref_fk(self.parents, self.offsets, quats, self.root_position)
 
 
-def ik_problems(got, case: IKCase) -> list[str]:
+def ik_problems(got: Any, case: IKCase) -> list[str]:
     """What is wrong with ``got`` as an ``ik_local`` answer to ``case``, worst first."""
     got = np.asarray(got, dtype=float)
     out = []
@@ -160,7 +162,7 @@ class IKLocalCheck(QuatCheck):
                 "unmoved and the joints off the path unchanged")
 
 
-def bone_directions(parents, offsets, quats) -> np.ndarray:
+def bone_directions(parents: np.ndarray, offsets: np.ndarray, quats: np.ndarray) -> np.ndarray:
     """Global unit direction of each bone (parent to joint) with a length, (J, 3); zero rows
     where the bone has none (joint 0 and zero offsets)."""
     P, _ = ref_fk(parents, offsets, rot.quat_normalize(np.asarray(quats, float)), np.zeros(3))
@@ -170,7 +172,8 @@ def bone_directions(parents, offsets, quats) -> np.ndarray:
     return np.where(n[:, None] > 1e-12, d / np.where(n > 1e-12, n, 1.0)[:, None], 0.0)
 
 
-def retarget_problems(got, parents, offsets_from, offsets_to, local_quats) -> list[str]:
+def retarget_problems(got: Any, parents: np.ndarray, offsets_from: np.ndarray,
+                      offsets_to: np.ndarray, local_quats: np.ndarray) -> list[str]:
     got = np.asarray(got, dtype=float)
     norms = _norm(got)
     bad = np.flatnonzero(np.abs(norms - 1) > ROTATION_TOL)
@@ -241,8 +244,9 @@ def random_quats(rng: np.random.Generator, n: int, spread: float) -> np.ndarray:
     return rot.quat_from_axis_angle(axes / _norm(axes)[:, None], rng.uniform(-spread, spread, n))
 
 
-def _solve_reference(parents, offsets, local_quats, root_position, fixed, effector, target,
-                     iterations, method: str = "dls"):
+def _solve_reference(parents: np.ndarray, offsets: np.ndarray, local_quats: np.ndarray,
+                     root_position: np.ndarray, fixed: int, effector: int, target: np.ndarray,
+                     iterations: int, method: str = "dls") -> np.ndarray:
     skeleton = Skeleton(_names(parents), parents, offsets)
     tol = 0.1 * REACH_TOL * path_length(parents, offsets, fixed, effector)
     result = solve(skeleton, local_quats, root_position, {int(effector): target}, method=method,
@@ -259,8 +263,8 @@ def _reaches(case: IKCase) -> bool:
                    for m in ("dls", "ccd"))
 
 
-def ik_case(rng, parents, offsets, fixed: int, effector: int, label: str, spread: float = 0.5,
-            reach: float = 0.3) -> Case | None:
+def ik_case(rng: np.random.Generator, parents: np.ndarray, offsets: np.ndarray, fixed: int,
+            effector: int, label: str, spread: float = 0.5, reach: float = 0.3) -> Case | None:
     """A start pose (random turns up to ``spread`` rad), a root position, and a target moved
     ``reach`` × the path's length from the end effector, which the reference reaches; None
     if 20 draws found none (a tree with a stubby path)."""
@@ -294,7 +298,7 @@ def random_ik_problem(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray,
             return parents, offsets, fixed, effector
 
 
-def random_ik_cases(rng, count: int, label: str) -> list[Case]:
+def random_ik_cases(rng: np.random.Generator, count: int, label: str) -> list[Case]:
     out: list[Case] = []
     while len(out) < count:
         parents, offsets, fixed, effector = random_ik_problem(rng)
@@ -306,7 +310,8 @@ def random_ik_cases(rng, count: int, label: str) -> list[Case]:
     return out
 
 
-def _character_case(rng, parents, offsets, fixed, effector, label, spread=0.5) -> Case:
+def _character_case(rng: np.random.Generator, parents: np.ndarray, offsets: np.ndarray,
+                    fixed: int, effector: int, label: str, spread: float = 0.5) -> Case:
     for _ in range(10):  # the character's paths are long: one draw in 20 nearly always does
         case = ik_case(rng, parents, offsets, fixed, effector, label, spread)
         if case is not None:
@@ -314,11 +319,11 @@ def _character_case(rng, parents, offsets, fixed, effector, label, spread=0.5) -
     raise RuntimeError(f"no reachable target found for {label!r}")
 
 
-def ik_random(rng):
+def ik_random(rng: np.random.Generator) -> list[Case]:
     return random_ik_cases(rng, 5, "random tree")
 
 
-def ik_character(rng):
+def ik_character(rng: np.random.Generator) -> list[Case]:
     names, parents, offsets = character()
     at = {n: j for j, n in enumerate(names)}
     pairs = (("LeftFoot", "LeftHand", "the left foot planted, the left hand reaching"),
@@ -330,7 +335,7 @@ def ik_character(rng):
     return [_character_case(rng, parents, offsets, at[f], at[e], label) for f, e, label in pairs]
 
 
-def ik_hidden(rng):
+def ik_hidden(rng: np.random.Generator) -> list[Case]:
     out = random_ik_cases(rng, 6, "hidden tree")
     names, parents, offsets = character(rng)
     feet = [names.index("LeftFoot"), names.index("RightFoot")]
@@ -346,15 +351,15 @@ def ik_hidden(rng):
 # --- path_to -----------------------------------------------------------------------------------
 
 
-def path_reference(parents, start, end):
+def path_reference(parents: np.ndarray, start: int, end: int) -> np.ndarray:
     return np.array(tree_path(np.asarray(parents), int(start), int(end)), dtype=np.int64)
 
 
-def _path_case(label, parents, start, end) -> Case:
+def _path_case(label: str, parents: np.ndarray, start: int, end: int) -> Case:
     return Case(label, (np.asarray(parents, dtype=np.int64), int(start), int(end)))
 
 
-def path_visible(rng):
+def path_visible(rng: np.random.Generator) -> list[Case]:
     names, parents, _ = character()
     at = {n: j for j, n in enumerate(names)}
     out = [_path_case(f"the character, {a} to {b}", parents, at[a], at[b])
@@ -368,7 +373,7 @@ def path_visible(rng):
     return out
 
 
-def path_edges(rng):
+def path_edges(rng: np.random.Generator) -> list[Case]:
     names, parents, _ = character()
     at = {n: j for j, n in enumerate(names)}
     return [
@@ -382,8 +387,8 @@ def path_edges(rng):
     ]
 
 
-def path_hidden(rng):
-    out = []
+def path_hidden(rng: np.random.Generator) -> list[Case]:
+    out: list[Case] = []
     for i in range(10):
         parents = random_parents(rng, int(rng.integers(2, 30)))
         a, b = rng.integers(0, len(parents), 2)
@@ -391,26 +396,26 @@ def path_hidden(rng):
     return out
 
 
-def downward_only(parents, start, end):
+def downward_only(parents: np.ndarray, start: int, end: int) -> np.ndarray:
     """The path from the common ancestor down to ``end``: the start's side dropped."""
     path = tree_path(np.asarray(parents), int(start), int(end))
     top = min(path)  # the common ancestor: parents come before children
     return np.array(path[path.index(top):], dtype=np.int64)
 
 
-def _ancestors(parents, j: int) -> list[int]:
+def _ancestors(parents: np.ndarray, j: int) -> list[int]:
     out = [int(j)]
     while parents[out[-1]] >= 0:
         out.append(int(parents[out[-1]]))
     return out
 
 
-def path_variant(how: str):
+def path_variant(how: str) -> Callable[[np.ndarray, int, int], np.ndarray]:
     """``path_to`` as students get it wrong: ``"to_root"`` (up to joint 0 and down again, not
     stopping at the lowest common ancestor), ``"reversed"`` (from the end to the start),
     ``"ancestor_twice"`` (the common ancestor ending the way up and starting the way down),
     ``"ancestor_dropped"`` (on neither)."""
-    def wrong(parents, start, end):
+    def wrong(parents: np.ndarray, start: int, end: int) -> np.ndarray:
         parents = np.asarray(parents)
         up, down = _ancestors(parents, start), _ancestors(parents, end)
         top = next(j for j in up if j in down)
@@ -426,25 +431,27 @@ def path_variant(how: str):
 # --- retarget_rest -----------------------------------------------------------------------------
 
 
-def _retarget_case(label, parents, offsets_from, offsets_to, quats) -> Case:
+def _retarget_case(label: str, parents: np.ndarray, offsets_from: np.ndarray,
+                   offsets_to: np.ndarray, quats: np.ndarray) -> Case:
     return Case(label, (np.asarray(parents, dtype=np.int64), np.asarray(offsets_from, float),
                         np.asarray(offsets_to, float), np.asarray(quats, float)))
 
 
-def rest_pair(rng, parents, offsets, spread: float = 1.0) -> np.ndarray:
+def rest_pair(rng: np.random.Generator, parents: np.ndarray, offsets: np.ndarray,
+              spread: float = 1.0) -> np.ndarray:
     """The offsets of the same hierarchy in another rest pose: a random pose baked in."""
     sk = Skeleton(_names(parents), parents, offsets)
     return np.array(with_rest_pose(sk, random_quats(rng, len(parents), spread)).offsets)
 
 
-def _random_tree(rng, n):
+def _random_tree(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
     parents = random_parents(rng, n)
     offsets = rng.normal(0, 1, (n, 3))
     offsets[1:] += 0.3 * np.sign(offsets[1:])  # no bone shorter than 0.3: each has a direction
     return parents, offsets
 
 
-def _t_and_a(rng=None):
+def _t_and_a(rng: np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     from course.retarget import a_pose_from_t_pose
 
     names, parents, offsets = character(rng)
@@ -452,7 +459,7 @@ def _t_and_a(rng=None):
     return parents, offsets, np.array(a_pose_from_t_pose(t_pose).offsets)
 
 
-def retarget_visible(rng):
+def retarget_visible(rng: np.random.Generator) -> list[Case]:
     parents, t_off, a_off = _t_and_a()
     out = [_retarget_case("the character, A pose to T pose", parents, a_off, t_off,
                           random_quats(rng, len(parents), 1.0)),
@@ -466,7 +473,7 @@ def retarget_visible(rng):
     return out
 
 
-def retarget_edges(rng):
+def retarget_edges(rng: np.random.Generator) -> list[Case]:
     chain = np.arange(-1, 4)
     offsets = np.tile([0.0, 1.0, 0.0], (5, 1))
     turn = np.tile([1.0, 0, 0, 0], (5, 1))
@@ -486,7 +493,7 @@ def retarget_edges(rng):
     ]
 
 
-def retarget_hidden(rng):
+def retarget_hidden(rng: np.random.Generator) -> list[Case]:
     parents, t_off, a_off = _t_and_a(rng)
     out = [_retarget_case("hidden character, A pose to T pose", parents, a_off, t_off,
                           random_quats(rng, len(parents), 1.2))]
@@ -499,14 +506,16 @@ def retarget_hidden(rng):
     return out
 
 
-def _corrections(parents, offsets_from, offsets_to, swapped: bool = False) -> np.ndarray:
+def _corrections(parents: np.ndarray, offsets_from: np.ndarray, offsets_to: np.ndarray,
+                 swapped: bool = False) -> np.ndarray:
     names = _names(parents)
     source, target = (Skeleton(names, parents, offsets_from), Skeleton(names, parents, offsets_to))
     return np.array(rest_corrections(target, source) if swapped else
                     rest_corrections(source, target))
 
 
-def corrected(parents, quats, C, right_side: bool = True) -> np.ndarray:
+def corrected(parents: np.ndarray, quats: np.ndarray, C: np.ndarray, right_side: bool = True
+              ) -> np.ndarray:
     """:math:`R'_i = C_{p(i)}^{-1} R_i C_i` (``R'_0 = R_0 C_0``), or with ``right_side=False``
     the sides swapped, :math:`C_i R_i C_{p(i)}^{-1}`."""
     parents = np.asarray(parents)
@@ -523,7 +532,8 @@ def _in_degrees(C: np.ndarray) -> np.ndarray:
     return rot.quat_from_axis_angle(axis, np.degrees(angle))
 
 
-def _first_bone_corrections(parents, offsets_from, offsets_to) -> np.ndarray:
+def _first_bone_corrections(parents: np.ndarray, offsets_from: np.ndarray,
+                            offsets_to: np.ndarray) -> np.ndarray:
     """C_i as the shortest arc for the FIRST child bone only, even where the children point
     two ways (the hips, the chest): the other bones come out twisted about the first."""
     parents = np.asarray(parents)
@@ -538,8 +548,13 @@ def _first_bone_corrections(parents, offsets_from, offsets_to) -> np.ndarray:
     return C
 
 
-def _retarget_variant(**how):
-    def wrong(parents, offsets_from, offsets_to, quats):
+#: ``retarget_rest``'s signature: (parents, offsets_from, offsets_to, local_quats) -> rotations
+Retarget = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
+def _retarget_variant(**how: bool) -> Retarget:
+    def wrong(parents: np.ndarray, offsets_from: np.ndarray, offsets_to: np.ndarray,
+              quats: np.ndarray) -> np.ndarray:
         if how.get("copied"):
             return np.array(quats, dtype=float)
         C = (_first_bone_corrections(parents, offsets_from, offsets_to) if how.get("first_bone")
@@ -555,11 +570,12 @@ def _retarget_variant(**how):
     return wrong
 
 
-def _same_bones_as(variant):
+def _same_bones_as(variant: Retarget) -> Callable[..., bool]:
     """A retarget symptom: wrong bone directions, and the same ones as ``variant`` gives (so
     the twist a student picks for a one-bone correction does not matter), to 1e-4: an angle
     taken as arccos of a dot product near 1 is good to ~1e-8 rad, times 57 in degrees."""
-    def shows(got, parents, offsets_from, offsets_to, quats):
+    def shows(got: Any, parents: np.ndarray, offsets_from: np.ndarray, offsets_to: np.ndarray,
+              quats: np.ndarray) -> bool:
         if not retarget_problems(got, parents, offsets_from, offsets_to, quats):
             return False
         mine = bone_directions(parents, offsets_to, got)
@@ -580,7 +596,7 @@ def _of_case(symptom: Callable[[Any, IKCase], bool]) -> Callable[..., bool]:
     return called
 
 
-def _joint0_held(got, case: IKCase) -> bool:
+def _joint0_held(got: Any, case: IKCase) -> bool:
     """Solved as if joint 0 were held, not the fixed joint (a solver whose turns all swing
     the subtree below the pivot): wrong, and the fixed joint turned in the world (held
     joint 0 or not, a solver that holds it turns it with its leg), or, in plain forward
@@ -601,7 +617,7 @@ def _joint0_held(got, case: IKCase) -> bool:
                 and plain < _norm(P[effector] - moved - target))
 
 
-def _world_turns_as_local(got, case: IKCase) -> bool:
+def _world_turns_as_local(got: Any, case: IKCase) -> bool:
     """Right once read as the lab report wrote it back: each answer R'_j = D_j R_j is a world
     turn D_j applied to a local rotation; applied to the world orientation instead,
     Q'_j = D_j Q_j, then R_j = Q'_{p(j)}^{-1} Q'_j, the rotations are a right answer."""
@@ -612,7 +628,7 @@ def _world_turns_as_local(got, case: IKCase) -> bool:
     return not ik_problems(fixed_up, case)
 
 
-def _world_returned(got, case: IKCase) -> bool:
+def _world_returned(got: Any, case: IKCase) -> bool:
     """Right once read as world orientations: R_i = Q_{p(i)}^{-1} Q_i of the answer is a
     right answer (and the answer itself is not)."""
     got = rot.quat_normalize(np.asarray(got, float))
@@ -667,7 +683,8 @@ class _LocalTurns:
         self.P, _ = self.case.fk(self.R)
 
     def rotations(self) -> np.ndarray:
-        return self.R.copy()
+        R: np.ndarray = self.R.copy()
+        return R
 
 
 def ccd_sweeps(case: IKCase, turns: _WorldTurns | _LocalTurns, lever: int = 0,
@@ -721,7 +738,7 @@ def _same_rotations(got: np.ndarray, model: np.ndarray) -> bool:
                        <= 1e-2))
 
 
-def _local_turns_in_loop(got, case: IKCase) -> bool:
+def _local_turns_in_loop(got: Any, case: IKCase) -> bool:
     """Wrong, and the rotations after some sweep of CCD with each world turn multiplied on
     the local rotation inside the loop."""
     g = np.asarray(got, dtype=float)
@@ -730,7 +747,7 @@ def _local_turns_in_loop(got, case: IKCase) -> bool:
     return any(_same_rotations(g, w) for w in ccd_sweeps(case, _LocalTurns(case)))
 
 
-def _wrong_joint(got, case: IKCase) -> bool:
+def _wrong_joint(got: Any, case: IKCase) -> bool:
     """Wrong, and the rotations of the template's CCD with each arc measured at the next
     joint, stopped as the template says (the effector within 1e-5 × the path's length)."""
     g = np.asarray(got, dtype=float)
@@ -849,16 +866,17 @@ MISCONCEPTIONS = (
 # --- pictures of a failing case ----------------------------------------------------------------
 
 
-def ik_picture(got, expected, args) -> Picture | None:
+def ik_picture(got: Any, expected: Any, args: tuple[Any, ...]) -> Picture | None:
     case = IKCase(*args)
     q = np.asarray(got, dtype=float)
     if q.shape != case.local_quats.shape or np.any(_norm(q) < 1e-9):
         return None
     P0, _ = case.fk(case.local_quats)
 
-    def pose(r):
+    def pose(r: np.ndarray) -> np.ndarray:
         P, _ = case.fk(rot.quat_normalize(r))
-        return P + (P0[case.fixed] - P[case.fixed])
+        placed: np.ndarray = P + (P0[case.fixed] - P[case.fixed])
+        return placed
 
     return Picture("your pose and the reference's, the fixed joint kept in place (the "
                    "reference is one right answer of many)", case.parents, pose(q),
@@ -867,7 +885,7 @@ def ik_picture(got, expected, args) -> Picture | None:
                            ("fixed joint", np.atleast_2d(P0[case.fixed]))))
 
 
-def retarget_picture(got, expected, args) -> Picture | None:
+def retarget_picture(got: Any, expected: Any, args: tuple[Any, ...]) -> Picture | None:
     parents, offsets_from, offsets_to, quats = args
     q = np.asarray(got, dtype=float)
     if q.shape != quats.shape or np.any(_norm(q) < 1e-9):
