@@ -2,21 +2,22 @@ r"""Counted arithmetic: numbers that count the operations done with them.
 
 A wall-clock time measured in Python mostly measures Python; the arithmetic an algorithm does
 can be *counted* instead. A :class:`Counted` number adds one to a running count for every
-:math:`+, -, \times, \div`, :math:`\sqrt{\ }`, :math:`\sin` and :math:`\cos` (a sign flip is
-free). numpy arrays of them (``dtype=object``, see :func:`counted`) run unchanged numpy code
-element by element, so a formula written with ``+``, ``@`` or ``np.sqrt`` on them is counted
-exactly (``np.linalg`` does not take them: :func:`solve3` below does)::
+:math:`+, -, \times, \div`, :math:`\sqrt{\ }`, :math:`\sin`, :math:`\cos` and
+:math:`\operatorname{atan2}` (a sign flip, an absolute value and a comparison are free).
+numpy arrays of them (``dtype=object``, see :func:`counted`) run unchanged numpy code element
+by element, so a formula written with ``+``, ``@`` or ``np.sqrt`` on them is counted exactly
+(``np.linalg`` does not take them: :func:`solve3` below does)::
 
     >>> from course.opcount import count_ops, counted, norm
     >>> value, ops = count_ops(norm, counted([3.0, 4.0, 0.0]))
     >>> value.value, ops             # 3 products, 2 sums, 1 square root
     (5.0, 6)
 
-The vector and quaternion helpers below (:func:`dot`, :func:`cross`, :func:`qmul`,
-:func:`qrot`, :func:`solve3`) are written with plain arithmetic so that every operation is
-seen; they also work on floats. :func:`ccd_sweep` and :func:`jacobian_iteration` are one
-iteration of CCD and of the Jacobian methods written out from the formulas of notebooks 02 and
-05–07, for counting (notebook 08 checks each against one iteration of :mod:`course.ik`).
+:func:`count_iteration` counts what :func:`course.ik.solve` itself does: it runs the solver
+that every solve of one serial chain runs (the chain engine, one problem in Python numbers)
+on counted numbers instead of floats, so the count is that of the library's own code, not of
+a rewrite. The vector and quaternion helpers (:func:`dot`, :func:`cross`, :func:`qmul`,
+:func:`qrot`, :func:`solve3`) are there to count formulas of your own.
 """
 
 from __future__ import annotations
@@ -27,6 +28,14 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from course import rotations as rot
+from course.ik._engine.chain import as_quat, as_vec
+from course.ik._engine.chain_solvers import ChainRun
+from course.ik._engine.ops import Floats
+from course.ik._pipeline import validate
+from course.ik.methods import REGISTRY
+from course.skeleton import Skeleton
 
 #: An array of :class:`Counted` (``dtype=object``), or of floats: the helpers take either.
 Numbers = Any
@@ -85,6 +94,25 @@ class Counted:
 
     def __neg__(self) -> Counted:  # a sign flip: free
         return Counted(-self.value)
+
+    def __abs__(self) -> Counted:  # free, as a sign flip
+        return Counted(abs(self.value))
+
+    def __float__(self) -> float:  # reading the value back: free
+        return self.value
+
+    # Comparisons decide branches and cost no arithmetic.
+    def __lt__(self, other: object) -> bool:
+        return self.value < _value(other)
+
+    def __le__(self, other: object) -> bool:
+        return self.value <= _value(other)
+
+    def __gt__(self, other: object) -> bool:
+        return self.value > _value(other)
+
+    def __ge__(self, other: object) -> bool:
+        return self.value >= _value(other)
 
     # np.sqrt, np.sin and np.cos of an object array call these methods of each element.
     def sqrt(self) -> Counted:
@@ -168,107 +196,110 @@ def _value(x: Any) -> float:
     return x.value if isinstance(x, Counted) else float(x)
 
 
-def ccd_sweep(P: Numbers, t: Numbers) -> np.ndarray:
-    """One CCD sweep, tip to root, on joint positions ``P (n + 1, 3)`` towards target ``t (3,)``.
-
-    Each joint turns ``e - r_i`` onto ``t - r_i`` by the shortest arc (notebook 05). Written
-    the economical way: during the sweep only the end effector is turned; the chain is rebuilt
-    once at the end. A joint with the effector or the target on its pivot has no direction to
-    turn to and stays (as in :func:`course.ik.ccd_positions`). Returns the new joint positions
-    ``(n + 1, 3)``.
-    """
-    e, turns = P[-1], list[np.ndarray]()
-    identity = np.array([1.0, 0.0, 0.0, 0.0])
-    for i in range(len(P) - 2, -1, -1):
-        u, v = e - P[i], t - P[i]
-        nu, nv = norm(u), norm(v)
-        if min(_value(nu), _value(nv)) < 1e-12:
-            turns.insert(0, identity)
-            continue
-        q = np.r_[nu * nv + dot(u, v), cross(u, v)]
-        q = q / np.sqrt(q[0] * q[0] + dot(q[1:], q[1:]))
-        e = P[i] + qrot(q, u)
-        turns.insert(0, q)
-    # Bone j was turned by q_j first, then by q_(j-1), ..., q_0: by the product q_0 ... q_j.
-    out, total = [P[0]], None
-    for j, q in enumerate(turns):
-        total = q if total is None else qmul(total, q)
-        out.append(out[-1] + qrot(total, P[j + 1] - P[j]))
-    return np.array(out)
+def atan2(y: Any, x: Any) -> Any:
+    r""":math:`\operatorname{atan2}(y, x)`: one operation if either is counted."""
+    if isinstance(y, Counted) or isinstance(x, Counted):
+        Counted.ops += 1
+        return Counted(math.atan2(_value(y), _value(x)))
+    return math.atan2(y, x)
 
 
-def _skew_columns(w: Numbers) -> np.ndarray:
-    """The three Jacobian columns ``x × w, y × w, z × w`` of a ball joint with lever arm ``w``."""
-    zero = 0.0
-    return np.array([[zero, w[2], -w[1]], [-w[2], zero, w[0]], [w[1], -w[0], zero]])
+class CountedOps(Floats):
+    """The chain engine's operations (:mod:`course.ik._engine.ops`) on one problem whose
+    numbers are :class:`Counted`: the engine's own code then counts what it does."""
+
+    @staticmethod
+    def sqrt(x: Any) -> Any:
+        return x.sqrt() if isinstance(x, Counted) else math.sqrt(x)
+
+    @staticmethod
+    def sin(x: Any) -> Any:
+        return x.sin() if isinstance(x, Counted) else math.sin(x)
+
+    @staticmethod
+    def cos(x: Any) -> Any:
+        return x.cos() if isinstance(x, Counted) else math.cos(x)
+
+    atan2 = staticmethod(atan2)
+
+    @staticmethod
+    def dist(a: tuple[Any, ...], b: tuple[Any, ...]) -> Any:
+        """``|a - b|`` of two points: 3 differences, 3 squares, 2 sums, a square root."""
+        x, y, z = a[0] - b[0], a[1] - b[1], a[2] - b[2]
+        return CountedOps.sqrt(x * x + y * y + z * z)
 
 
-def jacobian_iteration(R: Numbers, offsets: Numbers, t: Numbers, method: str,
-                       damping: float = 0.0) -> np.ndarray:
-    r"""One Jacobian iteration on a chain of ball joints, root at the origin.
+COUNTED = CountedOps()
+
+
+def count_iteration(skeleton: Skeleton, local_rotations: ArrayLike, target: ArrayLike,
+                    method: str, **options: Any) -> tuple[np.ndarray, int]:
+    r"""One iteration of :func:`course.ik.solve` on a serial chain, counted.
+
+    The chain engine's solver for ``method`` (what ``solve`` runs on one chain to one
+    position target) runs on :class:`Counted` numbers. It runs twice, for one iteration and
+    for two; the difference is the operations of one iteration (the set-up, forward
+    kinematics of the start and the bookkeeping, cancels). No reach-aware start, no limits.
 
     Parameters
     ----------
-    R : (n + 1, 4) local rotations; the last (the end effector) is carried unchanged.
-    offsets : (n + 1, 3) bone offsets :math:`l_i`.
-    t : (3,) the target.
-    method : ``"jacobian_transpose"`` (:math:`\alpha J^T\Delta e` with Buss's
-        :math:`\alpha = \langle\Delta e, JJ^T\Delta e\rangle / \lVert JJ^T\Delta e\rVert^2`),
-        ``"pseudo_inverse"`` or ``"dls"`` (:math:`J^T(JJ^T + \lambda^2 I)^{-1}\Delta e`; the
-        pseudo-inverse of a full-row-rank :math:`J` is :math:`\lambda = 0`).
-    damping : :math:`\lambda` for ``"dls"``.
+    skeleton : Skeleton
+        A serial chain (:func:`course.skeleton.chain`); its last joint is the end effector,
+        joint 0 sits at the origin.
+    local_rotations : array_like, shape (J, 4)
+        The starting pose.
+    target : array_like, shape (3,)
+    method : str
+        A method of :data:`course.ik.METHODS` with a chain solver.
+    **options
+        The method's options, as :func:`course.ik.solve` takes them.
 
     Returns
     -------
-    (n + 1, 4) the new local rotations,
-    :math:`R_i \leftarrow \exp(Q_{parent}^{-1}\Delta\theta_i)\,R_i`; a joint whose step is
-    zero (the effector already on the target) keeps its rotation, and a transpose step whose
-    :math:`JJ^T\Delta e` vanishes is zero (:math:`\alpha = 0`, as :mod:`course.ik` takes it).
+    positions : ndarray, shape (J, 3)
+        The joint positions after one iteration (those of ``solve(..., max_iter=1)``).
+    ops : int
+        The operations of one iteration.
     """
-    if method not in ("jacobian_transpose", "pseudo_inverse", "dls"):
-        raise ValueError(f"method: expected 'jacobian_transpose', 'pseudo_inverse' or 'dls', "
-                         f"got {method!r}")
-    # FK (02): Q_i = Q_parent R_i, p_i = p_parent + Q_parent l_i, joint 0 at the origin.
-    Q, p = [R[0]], [offsets[0]]
-    for i in range(1, len(R)):
-        p.append(p[-1] + qrot(Q[-1], offsets[i]))
-        Q.append(qmul(Q[-1], R[i]))
-    de = t - p[-1]
-    # J (07): a ball joint's three columns are the world axes x, y, z crossed with e - r_i.
-    J = np.hstack([_skew_columns(p[-1] - r) for r in p[:-1]])
-    if method == "jacobian_transpose":
-        g = J.T @ de
-        Jg = J @ g
-        den = dot(Jg, Jg)
-        step = dot(de, Jg) / den * g if _value(den) > 0 else np.zeros(len(g))
-    else:
-        A = J @ J.T
-        if method == "dls" and damping:
-            for k in range(3):
-                A[k, k] = A[k, k] + damping**2
-        step = J.T @ solve3(A, de)
-    # R_i <- exp(Q_parent^-1 dtheta_i) R_i: joint i's turn, taken into its parent's frame.
-    new = []
-    for i in range(len(R) - 1):
-        turn = step[3 * i:3 * i + 3]
-        if i > 0:
-            turn = qrot(np.r_[Q[i - 1][0], -Q[i - 1][1:]], turn)
-        angle = norm(turn)
-        if _value(angle) == 0:  # no step: exp(0) R_i = R_i (sin(angle/2)/angle would be 0/0)
-            new.append(np.asarray(R[i]))
-            continue
-        new.append(qmul(np.r_[np.cos(angle / 2), np.sin(angle / 2) / angle * turn], R[i]))
-    return np.array([*new, R[-1]])
+    (positions, one), (_, two) = (_counted_solve(skeleton, local_rotations, target, method,
+                                                 n, options) for n in (1, 2))
+    return positions, two - one
+
+
+def _counted_solve(skeleton: Skeleton, local_rotations: ArrayLike, target: ArrayLike,
+                   method: str, max_iter: int, options: dict[str, Any]
+                   ) -> tuple[np.ndarray, int]:
+    req = validate(skeleton, local_rotations, np.zeros(3), {skeleton.n_joints - 1: target},
+                   method, None, 1e-12, max_iter, None, None, False, options,
+                   reach_start=False)
+    spec = REGISTRY[method]
+    if req.serial is None or spec.chain is None or req.batched:
+        raise ValueError(f"count_iteration: expected one serial chain and a method with a "
+                         f"chain solver, got {skeleton.n_joints} joints and {method!r}")
+    chain = req.serial
+
+    def numbers(x: Any) -> tuple[Counted, ...]:
+        return tuple(Counted(v) for v in np.asarray(x, float).tolist())
+
+    inv_w2 = tuple((1.0 / req.col_weight**2).tolist()) if spec.weights else ()
+    run = ChainRun(chain, [as_quat(numbers(req.local[j])) for j in chain.joints],
+                   as_quat(numbers(rot.quat_identity())), as_vec(numbers(req.root_pos)),
+                   as_vec(numbers(req.pos_t[skeleton.n_joints - 1])), req.tol, max_iter,
+                   False, [], COUNTED, False, inv_w2)
+    solved, ops = count_ops(spec.chain, run, req.options)
+    return values(np.array([tuple(p) for p in solved.P], dtype=object)), ops
 
 
 __all__ = [
+    "COUNTED",
     "Counted",
-    "ccd_sweep",
+    "CountedOps",
+    "atan2",
+    "count_iteration",
     "count_ops",
     "counted",
     "cross",
     "dot",
-    "jacobian_iteration",
     "norm",
     "qmul",
     "qrot",

@@ -1,5 +1,6 @@
 """Counted arithmetic (:mod:`course.opcount`): counts checked against hand counts, values against
-independent references (numpy, :mod:`course.rotations`, one iteration of :mod:`course.ik`)."""
+independent references (numpy, :mod:`course.rotations`), and the counted IK iteration against
+one iteration of :func:`course.ik.solve`, bit for bit."""
 
 from __future__ import annotations
 
@@ -14,12 +15,12 @@ import course.ik as ik
 import course.rotations as rot
 from course.opcount import (
     Counted,
-    ccd_sweep,
+    atan2,
+    count_iteration,
     count_ops,
     counted,
     cross,
     dot,
-    jacobian_iteration,
     norm,
     qmul,
     qrot,
@@ -108,63 +109,49 @@ def _bent_snake(n=6, seed=1):
     return snake, pose, P, P[-1] + np.array([0.3, -0.2, 0.25])
 
 
-def test_ccd_sweep_is_one_iteration_of_course_ik():
-    _, _, P, goal = _bent_snake()
-    mine, ops = count_ops(ccd_sweep, counted(P), counted(goal))
-    assert np.allclose(values(mine), ik.ccd_positions(P, goal, max_iter=1)[0], atol=1e-9)
-    assert np.allclose(ccd_sweep(P, goal), values(mine))          # plain floats work too
-    assert ops > 0
+METHODS = ("fabrik", "ccd", "jacobian_transpose", "pseudo_inverse", "dls")
 
 
-@pytest.mark.parametrize("method", ["jacobian_transpose", "pseudo_inverse", "dls"])
-def test_jacobian_iteration_is_one_iteration_of_course_ik(method):
+def _options(method):
+    return {"damping": 0.5} if method == "dls" else {}
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_the_counted_iteration_is_one_iteration_of_course_ik_bit_for_bit(method):
     snake, pose, _, goal = _bent_snake()
-    damping = 0.5 if method == "dls" else 0.0
-    R, ops = count_ops(jacobian_iteration, counted(pose), counted(snake.offsets),
-                       counted(goal), method, damping)
-    options = {"damping": damping} if method == "dls" else {}
+    mine, ops = count_iteration(snake, pose, goal, method, **_options(method))
     library = ik.solve(snake, pose, np.zeros(3), {"end_effector": goal}, method=method,
-                       max_iter=1, tol=1e-12, **options)
+                       max_iter=1, tol=1e-12, reach_start=False, **_options(method))
     assert np.linalg.norm(goal) < 0.85 * snake.bone_lengths.sum()
-    assert np.allclose(snake.forward_kinematics(values(R))[0], library.positions, atol=1e-9)
+    assert np.array_equal(mine, library.positions)  # the library's own code, on other numbers
     assert ops > 0
 
 
-def test_jacobian_iteration_names_a_bad_method():
+@pytest.mark.parametrize("method", METHODS)
+def test_an_iteration_costs_the_same_for_every_bone(method):
+    # Each method visits every bone once per iteration with the same arithmetic: the count is
+    # a + b n, so chains of 4, 6 and 8 bones differ by the same amount.
+    counts = []
+    for n in (4, 6, 8):
+        snake, pose, _, goal = _bent_snake(n)
+        counts.append(count_iteration(snake, pose, goal, method, **_options(method))[1])
+    assert counts[2] - counts[1] == counts[1] - counts[0] > 0
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_no_iteration_runs_with_the_effector_on_the_target(method):
+    snake, pose, P, _ = _bent_snake()
+    mine, ops = count_iteration(snake, pose, P[-1], method, **_options(method))
+    assert ops == 0 and np.allclose(mine, P, atol=1e-12)
+
+
+def test_count_iteration_names_what_it_cannot_count():
     snake, pose, _, goal = _bent_snake()
-    with pytest.raises(ValueError, match="method"):
-        jacobian_iteration(pose, snake.offsets, goal, "newton")
+    with pytest.raises(ValueError, match="chain solver.*'two_link'"):
+        count_iteration(snake, pose, goal, "two_link")
 
 
-@pytest.mark.parametrize("method", ["jacobian_transpose", "pseudo_inverse", "dls"])
-def test_jacobian_iteration_with_the_effector_on_the_target_keeps_the_pose(method):
-    # Every joint's step is zero: exp(0) R = R, where sin(angle/2)/angle was 0/0 (NaN).
-    snake, pose, _, _ = _bent_snake()
-    damping = 0.5 if method == "dls" else 0.0
-    # The effector as the iteration's own forward kinematics places it (bit for bit), so the
-    # error and with it every step is exactly zero.
-    Q, e = pose[0], snake.offsets[0]
-    for i in range(1, len(pose)):
-        e, Q = e + qrot(Q, snake.offsets[i]), qmul(Q, pose[i])
-    R, _ = count_ops(jacobian_iteration, counted(pose), counted(snake.offsets), counted(e),
-                     method, damping)
-    assert np.array_equal(values(R), pose)
-    assert np.array_equal(jacobian_iteration(pose, snake.offsets, e, method, damping), pose)
-
-
-def test_jacobian_iteration_zero_step_for_one_joint_only():
-    # A target along the lever of the last joint's ball: its Jacobian columns see the error,
-    # yet a zero-length turn on any joint must keep that joint's rotation exactly.
-    snake, pose, P, goal = _bent_snake()
-    R = jacobian_iteration(pose, snake.offsets, goal, "dls", 0.5)
-    assert np.all(np.isfinite(R)) and np.array_equal(R[-1], pose[-1])
-
-
-def test_ccd_sweep_with_the_target_on_the_effector_or_on_a_joint():
-    _, _, P, _ = _bent_snake()
-    assert np.allclose(values(count_ops(ccd_sweep, counted(P), counted(P[-1]))[0]), P,
-                       atol=1e-12)
-    # The target on joint 2's pivot: that joint has no direction and stays; the rest turn.
-    mine = ccd_sweep(P, P[2])
-    assert np.all(np.isfinite(mine))
-    assert np.allclose(mine, ik.ccd_positions(P, P[2], max_iter=1)[0], atol=1e-9)
+def test_atan2_counts_one_operation_and_passes_floats():
+    value, ops = count_ops(atan2, Counted(1.0), 1.0)
+    assert value.value == pytest.approx(math.pi / 4) and ops == 1
+    assert atan2(0.0, -1.0) == math.pi

@@ -275,7 +275,7 @@ def solve_jacobian(run: ChainRun, options: JacobianOptions, /) -> ChainSolved:
         if run.record:
             frames.append(R)
     if not ops.all(history.converged):
-        cols = np.array([np.broadcast_arrays(*c) for c in chain.columns(Q, P, base)])
+        cols = np.array([np.broadcast_arrays(*c) for c in chain.columns(Q, P, base)], float)
         history.singular = ops.flag(lost_rank(np.moveaxis(cols.reshape(len(cols), 3, -1), -1, 0),
                                               rcond))
     return ChainSolved(R, P, history, frames)

@@ -50,7 +50,7 @@ class Ops(Protocol):
 
 
 
-class _Floats:
+class Floats:
     """Component operations for one problem in Python floats."""
 
     sqrt, sin, cos, atan2, dist = (staticmethod(f) for f in (math.sqrt, math.sin, math.cos,
@@ -122,7 +122,7 @@ class _Floats:
         return part
 
 
-class _Arrays(NumpyOps):
+class Arrays(NumpyOps):
     """Component operations for a batch: every component an ndarray (B,) (the rotation
     kernels' :class:`~course.rotations._kernels.NumpyOps`, and what the chain code adds)."""
 
@@ -162,13 +162,13 @@ class _Arrays(NumpyOps):
     def take(x: Any, idx: np.ndarray) -> Any:
         """``x[idx]`` for every array in a structure (the problems still running)."""
         if isinstance(x, tuple | list):
-            return type(x)(_Arrays.take(c, idx) for c in x)
+            return type(x)(Arrays.take(c, idx) for c in x)
         return x[idx] if isinstance(x, np.ndarray) and x.ndim else x
 
     @staticmethod
     def copy(x: Any) -> Any:
         if isinstance(x, tuple | list):
-            return type(x)(_Arrays.copy(c) for c in x)
+            return type(x)(Arrays.copy(c) for c in x)
         return x.copy() if isinstance(x, np.ndarray) else x
 
     @staticmethod
@@ -176,11 +176,11 @@ class _Arrays(NumpyOps):
         """``full[idx] = part`` for every array in a structure, in place."""
         if isinstance(full, tuple | list):
             for f, q in zip(full, part, strict=True):
-                _Arrays.put(f, idx, q)
+                Arrays.put(f, idx, q)
         else:
             full[idx] = part
         return full
 
 
-FLOATS: Ops = _Floats()
-ARRAYS: Ops = _Arrays()
+FLOATS: Ops = Floats()
+ARRAYS: Ops = Arrays()
