@@ -11,6 +11,7 @@ import os
 import sys
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -84,11 +85,9 @@ def _run_tests(assignment: Assignment, source: Source, prepared: tuple[Prepared,
                 continue
             catalogue = assignment.misconceptions_of(fn.name)
             if p.test.rollout is not None:
-                rolled = [roll(fn, p.test.rollout, c, e, sandbox, source.locate, catalogue)
-                          for c, e in zip(p.cases, p.expected, strict=True)]
-                tr.cases = [r for r, _ in rolled]
+                tr.cases, wrong = roll_test(fn, p, sandbox, source.locate, catalogue)
                 # the diagnosis reads, in each failing run, the first step unlike the reference's
-                tr.misconception = diagnose(assignment, fn, [w for _, w in rolled if w])
+                tr.misconception = diagnose(assignment, fn, wrong)
                 tr.elapsed = time.monotonic() - started_at
                 continue
             outcomes = sandbox.call(fn.name, [c.args for c in p.cases],
@@ -112,20 +111,67 @@ def _numbers(x: Any) -> int:
     return int(np.size(x)) if isinstance(x, (np.ndarray, np.generic, int, float)) else 1
 
 
+def roll_test(fn: Function, prepared: Prepared, sandbox: Sandbox, locate: Callable[[int], str],
+              catalogue: tuple[Misconception, ...]) -> tuple[list[CaseResult], list[CaseResult]]:
+    """Every run of a rollout test (:func:`roll`), with the steps to diagnose from. As in a
+    test of single calls, a frame that is not the child's own voids the whole test; the runs
+    together get ``rollout.seconds``, and those still running when it is spent end there."""
+    rollout = prepared.test.rollout
+    assert rollout is not None
+    pace = Pace(time.monotonic(), rollout.seconds)
+    results: list[CaseResult] = []
+    wrong: list[CaseResult] = []
+    for case, expected in zip(prepared.cases, prepared.expected, strict=True):
+        result, first_wrong = roll(fn, rollout, case, expected, sandbox, locate, catalogue,
+                                   pace, len(prepared.cases))
+        if result.kind == "garbage":  # none of the test can be trusted
+            return [CaseResult(c, "garbage", result.reason, None, e.answers[-1])
+                    for c, e in zip(prepared.cases, prepared.expected, strict=True)], []
+        results.append(result)
+        wrong += [first_wrong] if first_wrong else []
+    return results, wrong
+
+
+@dataclass
+class Pace:
+    """The wall-clock time the runs of one test have had, and the calls they made in it."""
+
+    started: float
+    seconds: float
+    calls: int = 0
+
+    def spent(self, rollout: Rollout, runs: int) -> str | None:
+        """Why no further step may run (the test's time is spent), or None."""
+        used = time.monotonic() - self.started
+        if used < self.seconds:
+            return None
+        each = 1e3 * used / max(self.calls, 1)
+        fits = 1e3 * self.seconds / (rollout.steps * runs)
+        return (f"not run: the runs of this test used their {self.seconds:g} s after "
+                f"{self.calls} calls; a step takes {each:.1f} ms here, and {fits:.1f} ms "
+                "would run them all (slow Python loops? use numpy on whole arrays)")
+
+
 def roll(fn: Function, rollout: Rollout, case: Case, expected: Run, sandbox: Sandbox,
-         locate: Callable[[int], str], catalogue: tuple[Misconception, ...]
-         ) -> tuple[CaseResult, CaseResult | None]:
+         locate: Callable[[int], str], catalogue: tuple[Misconception, ...],
+         pace: Pace, runs: int) -> tuple[CaseResult, CaseResult | None]:
     """One rollout case: the student's function called ``rollout.steps`` times in the
     sandbox, the state carried between calls here, and the run judged by
     ``rollout.verdict`` against the reference's (``expected``). Also returns, if the run
     fails, its first step whose answer is unlike the reference's on the same arguments (as
     a case of its own, for the diagnosis). A call that raises, stops or answers in the wrong
-    shape ends the run there (a raised error is then the step the diagnosis reads)."""
+    shape ends the run there (a raised error is then the step the diagnosis reads), and so
+    does the end of the test's time (``pace``, shared by its ``runs`` runs)."""
     steps: list[Case] = []
     run = Run([], [rollout.start(case.args)])
     size = 4 * _numbers(expected.answers[0]) + 64
     last = expected.answers[-1]
     for k, want in enumerate(expected.answers):
+        late = pace.spent(rollout, runs)
+        if late is not None:
+            return CaseResult(case, "skipped", f"step {k + 1} of {rollout.steps}: {late}",
+                              None, last), None
+        pace.calls += 1
         steps.append(Case(f"{case.label}, step {k + 1} of {rollout.steps}",
                           rollout.call(run.states[-1])))
         [out] = sandbox.call(fn.name, [steps[-1].args], [size])

@@ -109,13 +109,16 @@ class Rollout:
     is the next state. After ``steps`` calls ``verdict(yours, reference, args)`` compares
     the :class:`Run` with the reference function's by what they do (a rotation stays a
     rotation, a joint settles, a pushed body stands): None if it achieves what it should,
-    else one sentence on what it did."""
+    else one sentence on what it did. All runs of one test together may take ``seconds``
+    of wall-clock time (thousands of calls: a slow step must not spend the budget of the
+    tests after it)."""
 
     steps: int
     advance: Callable[[Any, Any], Any]
     verdict: Callable[[Run, Run, tuple[Any, ...]], str | None]
     start: Callable[[tuple[Any, ...]], Any] = _same
     call: Callable[[Any], tuple[Any, ...]] = _same
+    seconds: float = 20.0
 
     def run(self, step: Callable[..., Any], args: tuple[Any, ...]) -> Run:
         """The whole rollout from ``args`` with ``step`` (the reference) answering."""

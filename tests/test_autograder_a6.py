@@ -301,3 +301,75 @@ def rigid_body_step(*args):
     assert run.cases[0].reason.startswith("step 50 of 300: rigid_body_step raised "
                                           "RuntimeError: tired"), run.cases[0].reason
     assert result.score == result.max_score - run.test.points / 3
+
+
+def _runs_test(result, name="rigid_body_step: bodies"):
+    return next(t for t in result.tests if t.test.name.startswith(name))
+
+
+def test_a_forged_frame_in_one_run_voids_the_whole_test(tmp_path):
+    """As in a test of single calls: bytes written to the result channel in the middle of a
+    run leave nothing of that test to trust, so every run of it scores 0, and the tests
+    after it still run."""
+    src = tmp_path / "a6_physics.py"
+    src.write_text((FIXTURES / "a6" / "reference.py").read_text() + '''
+import os as _os
+
+_calls = [0]
+_right = rigid_body_step
+
+
+def rigid_body_step(*args):
+    _calls[0] += 1
+    if _calls[0] == 400:  # in the second run
+        for fd in range(3, 1024):
+            try:
+                _os.write(fd, b"\\x00\\x00\\x00\\x05hello")
+            except OSError:
+                pass
+    return _right(*args)
+''')
+    result = check("a6", src, limits=LIMITS)
+    run = _runs_test(result)
+    assert [c.kind for c in run.cases] == ["garbage"] * 3 and run.score == 0
+    assert all("result channel" in c.reason for c in run.cases), run.cases[0].reason
+    assert result.score == result.max_score - run.test.points
+
+
+def test_a_slow_step_ends_its_runs_when_their_time_is_spent(tmp_path, monkeypatch):
+    """Thousands of calls: a slow step may not spend the budget of the tests after it. The
+    runs of a test share ``Rollout.seconds`` (here 1 s, at 20 ms a step); the report says
+    how long a step takes and how long would do."""
+    import dataclasses
+
+    import autograder.assignments
+
+    real_load = autograder.assignments.load
+
+    def load(key):
+        assignment = real_load(key)
+        tests = tuple(dataclasses.replace(t, rollout=dataclasses.replace(t.rollout, seconds=1.0))
+                      if t.rollout and t.function == "rigid_body_step" else t
+                      for t in assignment.tests)
+        return dataclasses.replace(assignment, tests=tests)
+
+    monkeypatch.setattr(autograder.assignments, "load", load)
+    src = tmp_path / "a6_physics.py"
+    src.write_text((FIXTURES / "a6" / "reference.py").read_text() + '''
+import time as _time
+
+_right = rigid_body_step
+
+
+def rigid_body_step(*args):
+    _time.sleep(0.02)
+    return _right(*args)
+''')
+    result = check("a6", src, limits=LIMITS)
+    run = _runs_test(result)
+    assert [c.kind for c in run.cases] == ["skipped"] * 3, [c.reason for c in run.cases]
+    first = run.cases[0].reason
+    assert first.startswith("step ") and "the runs of this test used their 1 s after " in first
+    assert " ms here, and 1.1 ms would run them all" in first, first
+    assert run.elapsed < 3  # not 300 steps x 3 runs x 20 ms
+    assert result.score == result.max_score - run.test.points
