@@ -94,6 +94,12 @@ def as_time_step(h: float) -> float:
     return float(h)
 
 
+def as_radians(angle: Array, degrees: bool) -> Array:
+    """``angle`` in radians: converted when the caller's ``degrees=True`` says it is in
+    degrees."""
+    return np.radians(angle) if degrees else angle
+
+
 def broadcast_leading(where: str, *args: tuple[str, Array, int]) -> tuple[int, ...]:
     """The broadcast of the arguments' leading shapes, each without its trailing axes.
 
@@ -124,6 +130,40 @@ def broadcast_leading(where: str, *args: tuple[str, Array, int]) -> tuple[int, .
             f"{where}: {', '.join(names[:-1])} and {names[-1]} do not broadcast together: "
             f"{listing}; leading dimensions must be equal or 1"
         ) from None
+
+
+def as_point_chains(positions: ArrayLike, target: ArrayLike
+                    ) -> tuple[Array, Array, tuple[int, ...]]:
+    """Chains of joint positions and their targets, flattened over their broadcast batch.
+
+    Parameters
+    ----------
+    positions : array_like, shape (..., n, 3)
+        Joint positions, ``n >= 2``.
+    target : array_like, shape (..., 3)
+        A target per chain; its leading dimensions broadcast against those of ``positions``.
+
+    Returns
+    -------
+    chains : ndarray, shape (B, n, 3)
+        A writable copy, ``B`` the size of the batch.
+    targets : ndarray, shape (B, 3)
+    batch : tuple of int
+        The broadcast leading shape (``()`` for one chain): the results' shape.
+
+    Raises
+    ------
+    ValueError
+        If an argument has the wrong shape or is not finite.
+    """
+    P = as_array(positions, "positions", (3,))
+    t = as_array(target, "target", (3,))
+    if P.ndim < 2 or P.shape[-2] < 2:
+        raise ValueError(f"positions: expected shape (..., n, 3) with n >= 2, got {P.shape}")
+    batch = np.broadcast_shapes(P.shape[:-2], t.shape[:-1])
+    n = P.shape[-2]
+    chains = np.broadcast_to(P, batch + (n, 3)).reshape(-1, n, 3).copy()
+    return chains, np.broadcast_to(t, batch + (3,)).reshape(-1, 3), batch
 
 
 # Between these, |x|^2 neither overflows nor underflows, so np.linalg.norm (which squares the

@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from course._typing import Array
-from course._validate import as_array
+from course._validate import as_point_chains
 from course.rotations._kernels import TINY
 
 
@@ -69,14 +69,8 @@ def fabrik_positions(
     ValueError
         If an argument has the wrong shape or is not finite.
     """
-    P = as_array(positions, "positions", (3,))
-    t = as_array(target, "target", (3,))
-    if P.ndim < 2 or P.shape[-2] < 2:
-        raise ValueError(f"positions: expected shape (..., n, 3) with n >= 2, got {P.shape}")
-    batch = np.broadcast_shapes(P.shape[:-2], t.shape[:-1])
+    P, t, batch = as_point_chains(positions, target)
     n = P.shape[-2]
-    P = np.broadcast_to(P, batch + (n, 3)).reshape(-1, n, 3).copy()
-    t = np.broadcast_to(t, batch + (3,)).reshape(-1, 3)
     its, err = _fabrik(P, t, tol, max_iter)
     return P.reshape(batch + (n, 3)), its.reshape(batch), err.reshape(batch)
 

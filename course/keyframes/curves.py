@@ -109,6 +109,15 @@ def _check_derivative(derivative: int, highest: int = 2) -> int:
     return int(derivative)
 
 
+def _checked(keys: ArrayLike, times: ArrayLike, t: ArrayLike, derivative: int
+             ) -> tuple[Array, Array, Array, int]:
+    """The arguments of a curve through ``keys``, checked in the order their errors are
+    reported: keys and times, the derivative, the times ``t``."""
+    checked_keys, checked_times = check_keys(keys, times)
+    order = _check_derivative(derivative)
+    return checked_keys, checked_times, check_t(t, checked_times), order
+
+
 def segments(times: Array, t: Array) -> tuple[NDArray[np.intp], Array]:
     r"""The segment index :math:`i` with :math:`t_i \le t < t_{i+1}` (the last segment for
     :math:`t = t_{K-1}`) and the local parameter :math:`u = (t - t_i)/h_i \in [0, 1]`, for
@@ -141,9 +150,7 @@ def linear(keys: ArrayLike, times: ArrayLike, t: ArrayLike, *, derivative: int =
     -------
     ndarray, shape ``t.shape + keys.shape[1:]``
     """
-    keys, times = check_keys(keys, times)
-    derivative = _check_derivative(derivative)
-    t = check_t(t, times)
+    keys, times, t, derivative = _checked(keys, times, t, derivative)
     i, u = segments(times, t)
     c = keys.ndim - 1
     p0, p1 = keys[i], keys[i + 1]
@@ -180,9 +187,7 @@ def polynomial(keys: ArrayLike, times: ArrayLike, t: ArrayLike, *, derivative: i
 
     Parameters and returns as :func:`linear`.
     """
-    keys, times = check_keys(keys, times)
-    derivative = _check_derivative(derivative)
-    t = check_t(t, times)
+    keys, times, t, derivative = _checked(keys, times, t, derivative)
     c = newton_coefficients(keys, times)
     x = as_column(t, keys.ndim - 1)
     p = np.broadcast_to(c[-1], x.shape[:t.ndim] + c.shape[1:]).copy()
@@ -373,22 +378,15 @@ def catmull_rom(keys: ArrayLike, times: ArrayLike, t: ArrayLike, *, knots: str =
 
     Parameters
     ----------
-    keys : array_like, shape (K, ...)
-    times : array_like, shape (K,)
-        Strictly increasing.
-    t : array_like, shape (...)
-        Inside ``[times[0], times[-1]]``.
+    keys, times, t, derivative
+        As :func:`linear`.
     knots : {"time", "uniform", "centripetal"}
-    derivative : {0, 1, 2}
-        Time derivative to return.
 
     Returns
     -------
     ndarray, shape ``t.shape + keys.shape[1:]``
     """
-    keys, times = check_keys(keys, times)
-    derivative = _check_derivative(derivative)
-    t = check_t(t, times)
+    keys, times, t, derivative = _checked(keys, times, t, derivative)
     spacing = _knot_spacing(keys, times, knots)  # (K-1,) or (K-1, ...) without the point axis
     ds = as_column(spacing, keys.ndim - spacing.ndim)
     delta = np.diff(keys, axis=0) / ds

@@ -122,6 +122,13 @@ def _segment_logs(q: Array) -> Array:
     return _log(_mul(q[:-1] * _CONJUGATE, q[1:]))
 
 
+def _slerp_segments(q: Array, i: NDArray[np.intp], u: Array) -> Array:
+    r""":math:`\mathrm{slerp}(q_i, q_{i+1}, u) = q_i \exp(u \log(q_i^{-1} q_{i+1}))` on the
+    keys ``q`` (K, ..., 4): segments ``i`` and their parameters ``u`` from :func:`segments`,
+    ``u`` made a column (:func:`as_column`) against the keys' trailing axes."""
+    return _mul(q[i], _exp(u * _segment_logs(q)[i]))
+
+
 def slerp_keys(q_keys: ArrayLike, times: ArrayLike, t: ArrayLike) -> Array:
     r"""SLERP between neighbouring rotation keys (shortest path).
 
@@ -149,7 +156,7 @@ def slerp_keys(q_keys: ArrayLike, times: ArrayLike, t: ArrayLike) -> Array:
     q, times = _unit_keys(q_keys, times)
     t = check_t(t, times)
     i, u = segments(times, t)
-    return _mul(q[i], _exp(as_column(u, q.ndim - 1) * _segment_logs(q)[i]))
+    return _slerp_segments(q, i, as_column(u, q.ndim - 1))
 
 
 def squad_controls(q_keys: ArrayLike, times: ArrayLike) -> Array:
@@ -210,27 +217,15 @@ def squad(q_keys: ArrayLike, times: ArrayLike, t: ArrayLike) -> Array:
     rotations: the two differ once neighbouring keys are more than ~120° apart, and only the
     first keeps the curve C¹ (:func:`_segment_logs`).
 
-    Parameters
-    ----------
-    q_keys : array_like, shape (K, ..., 4)
-        Rotation keys (normalised here).
-    times : array_like, shape (K,)
-        Strictly increasing.
-    t : array_like, shape (...)
-        Inside ``[times[0], times[-1]]``.
-
-    Returns
-    -------
-    ndarray, shape ``t.shape + q_keys.shape[1:]``
-        Unit quaternions.
+    Parameters and returns as :func:`slerp_keys`.
     """
     q, times = _unit_keys(q_keys, times)
     t = check_t(t, times)
     s = squad_controls(q, times)
     i, u = segments(times, t)
     uc = as_column(u, q.ndim - 1)
-    along = _mul(q[i], _exp(uc * _segment_logs(q)[i]))  # slerp(q_i, q_i+1, u)
-    inner = _mul(s[i], _exp(uc * _segment_logs(s)[i]))  # slerp(s_i, s_i+1, u)
+    along = _slerp_segments(q, i, uc)  # slerp(q_i, q_i+1, u)
+    inner = _slerp_segments(s, i, uc)  # slerp(s_i, s_i+1, u)
     blend = _log(_mul(along * _CONJUGATE, inner))
     return _mul(along, _exp(2 * uc * (1 - uc) * blend))
 

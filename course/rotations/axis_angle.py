@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import Array
-from .._validate import as_array, as_unit, broadcast_leading, norm, unit
+from .._validate import as_array, as_radians, as_unit, broadcast_leading, norm, unit
 from . import _kernels
 from .quaternion import quat_from_matrix, quat_normalize
 
@@ -30,10 +30,6 @@ DEFAULT_AXIS = np.array([1.0, 0.0, 0.0])
 DEFAULT_AXIS.flags.writeable = False
 
 _ZERO_AXIS = "a rotation axis needs a non-zero vector"
-
-
-def _radians(angle: Array, degrees: bool) -> Array:
-    return np.radians(angle) if degrees else angle
 
 
 def _to_unit(angle: Array, degrees: bool) -> Array:
@@ -145,7 +141,7 @@ def _axis_and_angle(
     u = as_unit(axis, "axis", why=_ZERO_AXIS)
     theta = as_array(angle, "angle")
     broadcast_leading(where, ("axis", u, 1), ("angle", theta, 0))
-    return u, _radians(theta, degrees)
+    return u, as_radians(theta, degrees)
 
 
 def _rodrigues(u: Array, theta: Array) -> Array:
@@ -182,7 +178,7 @@ def axis_angle_from_matrix(R: ArrayLike, degrees: bool = False) -> tuple[Array, 
 
 def _split_rotvec(rotvec: ArrayLike, degrees: bool) -> tuple[Array, Array]:
     """Axis (``DEFAULT_AXIS`` for the zero vector) and angle in radians of rotation vectors."""
-    r = _radians(as_array(rotvec, "rotvec", (3,)), degrees)
+    r = as_radians(as_array(rotvec, "rotvec", (3,)), degrees)
     theta = norm(r)
     if not np.all(np.isfinite(theta)):
         raise ValueError("rotvec: has a length beyond the largest float; no angle to turn by")

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import Array, BoolArray
-from .._validate import as_array
+from .._validate import as_array, as_radians
 from . import _kernels
 from .quaternion import quat_from_matrix, quat_normalize
 
@@ -83,8 +83,12 @@ def _parse_order(order: object) -> tuple[tuple[int, int, int], bool]:
     return (i, j, k), order.isupper()
 
 
-def _radians(angles: Array, degrees: bool) -> Array:
-    return np.radians(angles) if degrees else angles
+def _checked(angles: ArrayLike, order: str, degrees: bool
+             ) -> tuple[tuple[int, int, int], bool, Array]:
+    """The axes of ``order``, whether it is intrinsic, and ``angles`` (..., 3) in radians (a
+    bad order is reported before bad angles)."""
+    axes, intrinsic = _parse_order(order)
+    return axes, intrinsic, as_radians(as_array(angles, "angles", (3,)), degrees)
 
 
 def _axis_matrix(axis: int, angle: Array) -> Array:
@@ -131,8 +135,7 @@ def matrix_from_euler(angles: ArrayLike, order: str, degrees: bool = False) -> A
     ValueError
         If ``order`` is not one of the 24 orders, or ``angles`` has a bad shape or values.
     """
-    axes, intrinsic = _parse_order(order)
-    a = _radians(as_array(angles, "angles", (3,)), degrees)
+    axes, intrinsic, a = _checked(angles, order, degrees)
     m = [_axis_matrix(axis, a[..., n]) for n, axis in enumerate(axes)]
     return m[0] @ m[1] @ m[2] if intrinsic else m[2] @ m[1] @ m[0]
 
@@ -156,8 +159,7 @@ def quat_from_euler(angles: ArrayLike, order: str, degrees: bool = False) -> Arr
     -------
     ndarray, shape (..., 4)
     """
-    axes, intrinsic = _parse_order(order)
-    a = _radians(as_array(angles, "angles", (3,)), degrees)
+    axes, intrinsic, a = _checked(angles, order, degrees)
     qs = [_axis_quat(axis, a[..., n]) for n, axis in enumerate(axes)]
     mul = _kernels.quat_mul
     q = mul(mul(qs[0], qs[1]), qs[2]) if intrinsic else mul(mul(qs[2], qs[1]), qs[0])
@@ -327,8 +329,8 @@ def gimbal_lock_distance(angles: ArrayLike, order: str, degrees: bool = False) -
     ndarray, shape (...)
         In :math:`[0, \pi/2]` (or ``[0, 90]`` degrees).
     """
-    axes, _ = _parse_order(order)
-    middle = _radians(as_array(angles, "angles", (3,)), degrees)[..., 1]
+    axes, _, a = _checked(angles, order, degrees)
+    middle = a[..., 1]
     proper = axes[0] == axes[2]
     # arcsin|sin b| is the distance of b to the nearest multiple of pi; |cos b| shifts by pi/2.
     dist = np.arcsin(np.minimum(np.abs(np.sin(middle) if proper else np.cos(middle)), 1.0))

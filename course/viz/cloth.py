@@ -5,7 +5,7 @@ overwritten on every step (smooth normals are recomputed by a VTK filter downstr
 is rebuilt), with its pinned corners as spheres. :class:`ClothSimulator` adds the controls:
 stiffness and time-step sliders, the integrator, play/pause (``widgets.Play``, ticking in the
 browser), single steps and a reset, and a readout with the energy and the Newton statistics
-of each implicit step. As in :mod:`course.viz.controls`, every widget event runs on the GL
+of each implicit step. As in every view of :mod:`course.viz`, every widget event runs on the GL
 thread (:func:`~course.viz.backend.latest_on_gl_thread`), and setting a widget's value from
 code does what clicking it does.
 """
@@ -20,8 +20,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .backend import configure_environment, latest_on_gl_thread
+from .live_simulator import LiveSimulator, log_slider
 from .live_view import LiveView, shade
-from .meshes import overwrite
+from .meshes import as_positions, move_points
 from .scene import PALETTE
 
 configure_environment()
@@ -104,25 +105,12 @@ class ClothScene(LiveView):
 
     def set_positions(self, positions: ArrayLike, *, render: bool = True) -> None:
         """Overwrite the mesh's points (the same arrays: nothing is re-created)."""
-        p = self._checked(positions, self.mesh.n_points)
-        if not np.all(np.isfinite(p)):
-            raise ValueError("positions contains NaN or infinite values")
-        overwrite(self.mesh.points, p)
-        self.mesh.GetPoints().Modified()
-        self.mesh.Modified()
+        move_points(self.mesh, as_positions(positions, self.mesh.n_points))
         if render:
             self.render()
 
 
-def _log_slider(description: str, value: float, lo: float, hi: float, fmt: str
-                ) -> widgets.FloatLogSlider:
-    return widgets.FloatLogSlider(
-        value=value, base=10, min=np.log10(lo), max=np.log10(hi), step=0.05,
-        description=description, readout_format=fmt, continuous_update=False,
-        style={"description_width": "90px"}, layout=widgets.Layout(width="360px"))
-
-
-class ClothSimulator:
+class ClothSimulator(LiveSimulator[ClothScene]):
     """A cloth simulated live: sliders for the stiffness ``k`` and the time step ``h``, the
     integrator, play/pause, one step, reset; the readout shows the time, the energy and, for
     implicit Euler, each step's Newton iterations, line-search backtracks and ``‖∇E‖``.
@@ -138,8 +126,6 @@ class ClothSimulator:
         slower than ``speed``, and the readout says so ("0.05× real time").
     """
 
-    PANEL_WIDTH = 380  # px: the controls and the readout; fixed, so the view never moves
-
     def __init__(self, cloth: Any, *, method: str = "implicit", h: float = 1 / 60,
                  speed: float = 1.0, max_steps_per_tick: int = 10, interval: int = 40,
                  window_size: tuple[int, int] = (640, 480)) -> None:
@@ -151,46 +137,21 @@ class ClothSimulator:
         self.cloth = cloth
         if not speed > 0 or int(max_steps_per_tick) < 1 or int(interval) < 1:
             raise ValueError("speed, max_steps_per_tick and interval must be positive")
-        self.speed, self.max_steps_per_tick = float(speed), int(max_steps_per_tick)
         self.last: NewtonStats | None = None  # the statistics of the last implicit step
-        self.scene = ClothScene(cloth, window_size=window_size)
-        self.play = widgets.Play(value=0, min=0, max=10**9, step=1, interval=int(interval),
-                                 description="play")
-        self.sliders = {
-            "stiffness": _log_slider("stiffness k", cloth.stiffness, 10.0, 1e5, ".0f"),
-            "h": _log_slider("time step h", h, 1e-4, 0.1, ".4f"),
+        sliders = {
+            "stiffness": log_slider("stiffness k", cloth.stiffness, 10.0, 1e5, ".0f"),
+            "h": log_slider("time step h", h, 1e-4, 0.1, ".4f"),
             "method": widgets.Dropdown(options=list(METHODS), value=method,
                                        description="integrator",
                                        style={"description_width": "90px"},
                                        layout=widgets.Layout(width="260px")),
         }
-        self.step_button = widgets.Button(description="step", icon="step-forward")
-        self.reset_button = widgets.Button(description="reset", icon="undo")
-        width = f"{self.PANEL_WIDTH}px"  # long readout lines wrap inside it
-        self.readout = widgets.HTML(layout=widgets.Layout(width=width, min_width=width))
-        self.play.observe(latest_on_gl_thread(lambda _c: self.tick()), names="value")
-        self.sliders["stiffness"].observe(
-            latest_on_gl_thread(self._stiffness_changed), names="value")
+        sliders["stiffness"].observe(latest_on_gl_thread(self._stiffness_changed), names="value")
         for name in ("h", "method"):  # (h changes the steps per tick: shown)
-            self.sliders[name].observe(latest_on_gl_thread(lambda _c: self._show()),
-                                       names="value")
-        self.step_button.on_click(latest_on_gl_thread(lambda _b: self.advance(1)))
-        self.reset_button.on_click(latest_on_gl_thread(lambda _b: self.reset()))
-        buttons = widgets.HBox([self.play, self.step_button, self.reset_button])
-        self.panel = widgets.VBox([buttons, *self.sliders.values(), self.readout],
-                                  layout=widgets.Layout(flex="0 0 auto", width=width,
-                                                        min_width=width, margin="0 12px 0 0"))
-        view = self.scene.widget()
-        w = f"{window_size[0]}px"  # the view keeps its size whatever the readout says
-        view.layout.width, view.layout.min_width, view.layout.flex = w, w, "0 0 auto"
-        self.widget = widgets.HBox([self.panel, view], layout=widgets.Layout(
-            align_items="flex-start", flex_flow="row wrap"))
-        self.reset()
-
-    def _ipython_display_(self) -> None:
-        from IPython.display import display
-
-        display(self.widget)
+            sliders[name].observe(latest_on_gl_thread(lambda _c: self._show()), names="value")
+        super().__init__(ClothScene(cloth, window_size=window_size), sliders, speed=speed,
+                         max_steps_per_tick=max_steps_per_tick, interval=interval,
+                         window_size=window_size)
 
     def _stiffness_changed(self, change: Mapping[str, float]) -> None:
         self.cloth = self.base.with_stiffness(change["new"])
@@ -204,21 +165,6 @@ class ClothSimulator:
         self.exploded = False
         self.scene.set_positions(self.x, render=False)
         self._show()
-
-    @property
-    def steps_per_tick(self) -> int:
-        """How many steps of ``h`` one tick of play takes: enough for ``speed``, capped."""
-        wanted = self.speed * self.play.interval / 1000 / self.sliders["h"].value
-        return int(min(max(round(wanted), 1), self.max_steps_per_tick))
-
-    @property
-    def playback_speed(self) -> float:
-        """Simulated seconds per real second while playing (1.0: real time)."""
-        return float(self.steps_per_tick * self.sliders["h"].value / (self.play.interval / 1000))
-
-    def tick(self) -> None:
-        """What one tick of play does: :attr:`steps_per_tick` steps, drawn once."""
-        self.advance(self.steps_per_tick)
 
     def advance(self, n: int = 1) -> None:
         """Take ``n`` steps and draw the result once."""
@@ -262,13 +208,6 @@ class ClothSimulator:
                          "reset, and try a smaller h or implicit Euler</b>")
         self.readout.value = "<br>".join(lines)
         self.scene.render()
-
-    def close(self) -> None:
-        """Close the widgets and free the render window."""
-        for w in (self.play, self.step_button, self.reset_button, *self.sliders.values(),
-                  self.readout, self.widget):
-            w.close()
-        self.scene.close()
 
 
 def cloth_simulator(cloth: Any | None = None, **kwargs: Any) -> ClothSimulator:

@@ -50,6 +50,14 @@ def overwrite(array: pv.pyvista_ndarray, values: ArrayLike, rows: slice = slice(
     array[rows] = values  # type: ignore[index]
 
 
+def move_points(mesh: pv.PolyData, points: ArrayLike) -> None:
+    """Overwrite all of ``mesh``'s points in place and mark them and the mesh modified, so
+    that every filter and mapper downstream re-runs at the next render."""
+    overwrite(mesh.points, points)
+    mesh.GetPoints().Modified()
+    mesh.Modified()
+
+
 def segments(pairs: NDArray[np.intp]) -> NDArray[np.intp]:
     """VTK line connectivity ``[2, a, b, 2, c, d, ...]`` for index pairs ``(S, 2)``."""
     return np.column_stack([np.full(len(pairs), 2), pairs]).ravel()

@@ -21,7 +21,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .backend import configure_environment, latest_on_gl_thread
+from .live_simulator import LiveSimulator, log_slider
 from .live_view import LiveView, shade
+from .meshes import move_points
 from .scene import PALETTE
 
 configure_environment()
@@ -98,22 +100,12 @@ class RigidBodyScene(LiveView):
             raise ValueError(f"x, q: expected shapes (3,) and (4,), got {x.shape} and {q.shape}")
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(q))):
             raise ValueError("x, q: contain NaN or infinite values")
-        np.copyto(self.mesh.points, x + self.body_points @ _quat_matrix(q).T)
-        self.mesh.GetPoints().Modified()
-        self.mesh.Modified()
+        move_points(self.mesh, x + self.body_points @ _quat_matrix(q).T)
         if render:
             self.render()
 
 
-def _log_slider(description: str, value: float, lo: float, hi: float, fmt: str
-                ) -> widgets.FloatLogSlider:
-    return widgets.FloatLogSlider(
-        value=value, base=10, min=np.log10(lo), max=np.log10(hi), step=0.05,
-        description=description, readout_format=fmt, continuous_update=False,
-        style={"description_width": "90px"}, layout=widgets.Layout(width="360px"))
-
-
-class RigidBodySimulator:
+class RigidBodySimulator(LiveSimulator[RigidBodyScene]):
     """A rigid body simulated live (symplectic Euler, exact rotation update).
 
     Parameters
@@ -126,54 +118,29 @@ class RigidBodySimulator:
     max_steps_per_tick : the most steps one tick of play (every 40 ms) takes.
     """
 
-    PANEL_WIDTH = 380  # px: the controls and the readout; fixed, so the view never moves
-
     def __init__(self, body: Any, start: Any, *, ground: bool = True, h: float = 2e-3,
                  k: float = 1e4, max_steps_per_tick: int = 40, center: ArrayLike = (0, 0.2, 0),
                  radius: float = 0.5, window_size: tuple[int, int] = (640, 480)) -> None:
         if int(max_steps_per_tick) < 1:
             raise ValueError("max_steps_per_tick must be positive")
         self.body, self.start, self.ground = body, start, bool(ground)
-        self.max_steps_per_tick = int(max_steps_per_tick)
-        self.scene = RigidBodyScene(body, floor=ground, center=center, radius=radius,
-                                    window_size=window_size)
-        self.play = widgets.Play(value=0, min=0, max=10**9, step=1, interval=40,
-                                 description="play")
-        self.sliders: dict[str, widgets.Widget] = {"h": _log_slider("time step h", h, 1e-4,
-                                                                    0.05, ".4f")}
+        scene = RigidBodyScene(body, floor=ground, center=center, radius=radius,
+                               window_size=window_size)
+        sliders: dict[str, widgets.Widget] = {"h": log_slider("time step h", h, 1e-4, 0.05,
+                                                              ".4f")}
         if ground:
-            self.sliders["k"] = _log_slider("stiffness k", k, 1e2, 1e6, ".0f")
-        self.sliders["push"] = widgets.FloatSlider(
+            sliders["k"] = log_slider("stiffness k", k, 1e2, 1e6, ".0f")
+        sliders["push"] = widgets.FloatSlider(
             value=1.0, min=0.0, max=5.0, step=0.1, description="push (m/s)",
             readout_format=".1f", continuous_update=False, style={"description_width": "90px"},
             layout=widgets.Layout(width="360px"))
-        self.step_button = widgets.Button(description="step", icon="step-forward")
-        self.push_button = widgets.Button(description="push", icon="hand-o-right")
-        self.reset_button = widgets.Button(description="reset", icon="undo")
-        width = f"{self.PANEL_WIDTH}px"
-        self.readout = widgets.HTML(layout=widgets.Layout(width=width, min_width=width))
-        self.play.observe(latest_on_gl_thread(lambda _c: self.tick()), names="value")
-        for slider in self.sliders.values():
+        for slider in sliders.values():
             slider.observe(latest_on_gl_thread(lambda _c: self._show()), names="value")
-        self.step_button.on_click(latest_on_gl_thread(lambda _b: self.advance(1)))
+        self.push_button = widgets.Button(description="push", icon="hand-o-right")
         self.push_button.on_click(latest_on_gl_thread(lambda _b: self.push()))
-        self.reset_button.on_click(latest_on_gl_thread(lambda _b: self.reset()))
-        buttons = widgets.HBox([self.play, self.step_button, self.push_button,
-                                self.reset_button])
-        self.panel = widgets.VBox([buttons, *self.sliders.values(), self.readout],
-                                  layout=widgets.Layout(flex="0 0 auto", width=width,
-                                                        min_width=width, margin="0 12px 0 0"))
-        view = self.scene.widget()
-        w = f"{window_size[0]}px"
-        view.layout.width, view.layout.min_width, view.layout.flex = w, w, "0 0 auto"
-        self.widget = widgets.HBox([self.panel, view], layout=widgets.Layout(
-            align_items="flex-start", flex_flow="row wrap"))
-        self.reset()
-
-    def _ipython_display_(self) -> None:
-        from IPython.display import display
-
-        display(self.widget)
+        super().__init__(scene, sliders, buttons=[self.push_button],
+                         max_steps_per_tick=max_steps_per_tick, interval=40,
+                         window_size=window_size)
 
     def _options(self) -> dict[str, Any]:
         from course.physics.rigid_body import Ground
@@ -189,16 +156,6 @@ class RigidBodySimulator:
         self.time, self.steps, self.exploded = 0.0, 0, False
         self.scene.set_state(self.state.x, self.state.q, render=False)
         self._show()
-
-    @property
-    def steps_per_tick(self) -> int:
-        """Steps of ``h`` per tick of play: real time (40 ms per tick) if the cap allows."""
-        wanted = self.play.interval / 1000 / float(self.sliders["h"].value)
-        return int(min(max(round(wanted), 1), self.max_steps_per_tick))
-
-    def tick(self) -> None:
-        """What one tick of play does: :attr:`steps_per_tick` steps, drawn once."""
-        self.advance(self.steps_per_tick)
 
     def advance(self, n: int = 1) -> None:
         """Take ``n`` steps and draw the result once."""
@@ -245,13 +202,6 @@ class RigidBodySimulator:
                          "reset, and try a smaller h or a softer k</b>")
         self.readout.value = "<br>".join(lines)
         self.scene.render()
-
-    def close(self) -> None:
-        """Close the widgets and free the render window."""
-        for w in (self.play, self.step_button, self.push_button, self.reset_button,
-                  *self.sliders.values(), self.readout, self.widget):
-            w.close()
-        self.scene.close()
 
 
 def rigid_body_simulator(kind: str = "box", **kwargs: Any) -> RigidBodySimulator:

@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._typing import Array
 from .backend import configure_environment
 from .live_view import shade
-from .meshes import as_positions, overwrite, segments, sphere_actor, tube_actor
+from .meshes import as_positions, move_points, segments, sphere_actor, tube_actor
 
 configure_environment()
 
@@ -84,9 +84,7 @@ class SkeletonActors:
         """Overwrite the joints (bones share their points) and the triads, if drawn (they
         need ``orientations (J, 4)``); returns the checked positions ``(J, 3)``."""
         pos = as_positions(positions, self.parents.size)
-        overwrite(self.points.points, pos)
-        self.points.GetPoints().Modified()
-        self.points.Modified()
+        move_points(self.points, pos)
         self.bones.Modified()
         if self.triads is not None:
             self._set_triads(self.triads, pos, orientations)
