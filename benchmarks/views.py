@@ -42,10 +42,9 @@ def _row(name: str, fast: float, slow: float | None = None) -> None:
 
 
 def main() -> None:
-    from course import data
+    from course import data, viz
     from course.rotations import quat_from_euler
     from course.skeleton import chain
-    from course.viz import controls
     from course.viz.figures import (
         ChainPlot,
         GimbalFigure,
@@ -94,27 +93,27 @@ def main() -> None:
 
     print("\nvalue change -> rendered frame (static backend: render + PNG),"
           " beside rebuilding the views for the same event")
-    ex = controls.fk_explorer(sk, local, root)
+    ex = viz.fk_explorer(sk, local, root)
     slider = ex.sliders["LeftArm.0"]
     fast = _median_ms(lambda i: setattr(slider, "value", float(i % 90)))
     _row("fk_explorer (38 joints, axes)", fast, _median_ms(
         lambda _i: rebuild(sk.parents, ex.positions), 5))
     ex.close()
 
-    player = controls.bvh_player(motion, curves={"hips y": motion.root_positions[:, 1] / 100})
+    player = viz.bvh_player(motion, curves={"hips y": motion.root_positions[:, 1] / 100})
     fast = _median_ms(lambda i: setattr(player.sliders["frame"], "value", 7 * i))
     _row("bvh_player frame (+ curve cursor)", fast, _median_ms(
         lambda i: rebuild(sk.parents, player.positions[7 * i], (720, 480)), 5))
     player.close()
 
-    rot = controls.rotation_explorer()
+    rot = viz.rotation_explorer()
     _row("rotation_explorer (frame + gimbal figure)",
          _median_ms(lambda i: setattr(rot.sliders["angle0"], "value", float(i))),
          _median_ms(lambda i: (rebuild_frames(1, (380, 340)),
                                GimbalFigure("XYZ", (0.01 * i, 0, 0)).png()), 5))
     rot.close()
 
-    se = controls.slerp_explorer()
+    se = viz.slerp_explorer()
     _row("slerp_explorer t (3 frames + arc marker)",
          _median_ms(lambda i: setattr(se.sliders["t"], "value", 0.05 * (i % 20))),
          _median_ms(lambda i: (rebuild_frames(3, (780, 330)), figure_png(
@@ -125,7 +124,7 @@ def main() -> None:
              slerp_arc_figure(se.q0, quat_from_euler([0.3, 1.7 + 0.01 * i, 1.0], "XYZ")))), 5))
     se.close()
 
-    pg = controls.ik_playground(arm, methods=["ccd", "fabrik", "dls"])
+    pg = viz.ik_playground(arm, methods=["ccd", "fabrik", "dls"])
 
     def naive_ik(i: int) -> None:
         r = course.ik.solve(arm, ident, np.zeros(3), {"joint6": pg.target}, method="dls",
@@ -142,7 +141,7 @@ def main() -> None:
         lambda i: rebuild(arm.parents, pg.frames[i % len(pg.frames)], (640, 500)), 5))
     pg.close()
 
-    fb = controls.full_body_ik(motion, 100)
+    fb = viz.full_body_ik(motion, 100)
     y0 = fb.sliders["y"].value
     fast = _median_ms(lambda i: setattr(fb.sliders["y"], "value", y0 + 0.1 * (i % 20)))
     _row("full_body_ik target (dls, two effectors)", fast, _median_ms(

@@ -1,4 +1,4 @@
-"""course.viz.controls: drive every control from code and check the scene and readouts."""
+"""course.viz's ipywidgets views: drive every control from code and check the scene and readouts."""
 
 from __future__ import annotations
 
@@ -15,7 +15,8 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
-from course.viz import controls  # noqa: E402
+from course import viz  # noqa: E402
+from course.viz import panel  # noqa: E402
 from course.viz.scene import GHOST, PALETTE  # noqa: E402
 
 
@@ -25,7 +26,7 @@ def _same_rotation(q, ref: Rotation) -> None:
 
 
 def test_rotation_explorer_warns_at_gimbal_lock_and_matches_scipy():
-    ex = controls.rotation_explorer("XYZ", (0.0, np.pi / 2, 0.0))
+    ex = viz.rotation_explorer("XYZ", (0.0, np.pi / 2, 0.0))
     try:
         assert ex.gimbal_lock and "Gimbal lock" in ex.warning.value
         ex.sliders["angle0"].value = 30.0
@@ -47,7 +48,7 @@ def test_rotation_explorer_warns_at_gimbal_lock_and_matches_scipy():
 
 
 def test_slerp_explorer_lerp_shrinks_and_slerp_moves_evenly():
-    ex = controls.slerp_explorer((0, 0, 0), (0, 120, 0), t=0.25)
+    ex = viz.slerp_explorer((0, 0, 0), (0, 120, 0), t=0.25)
     try:
         q = ex.quaternions
         assert np.linalg.norm(q["LERP"]) < 1 - 1e-3
@@ -68,7 +69,7 @@ def test_fk_explorer_slider_moves_children_by_the_fk_result():
     from course.skeleton import chain
 
     arm = chain([1.0, 0.8, 0.5], axes=[0, 0, 1])
-    ex = controls.fk_explorer(arm)
+    ex = viz.fk_explorer(arm)
     try:
         before = ex.scene.joint_positions
         np.testing.assert_allclose(before[:, 0], [0, 1, 1.8, 2.3])
@@ -94,7 +95,7 @@ def sample_motion():
 
 
 def test_bvh_player_shows_the_precomputed_frame(sample_motion):
-    player = controls.bvh_player(sample_motion, camera="iso")
+    player = viz.bvh_player(sample_motion, camera="iso")
     try:
         positions, _ = sample_motion.forward_kinematics()
         player.sliders["frame"].value = 37
@@ -113,7 +114,7 @@ def test_bvh_player_shows_the_precomputed_frame(sample_motion):
 def test_bvh_player_draws_other_clips_beside_it_frame_by_frame(sample_motion):
     positions, _ = sample_motion.forward_kinematics()
     beside = positions + [15.0, 0.0, 0.0]
-    player = controls.bvh_player(sample_motion, name="reference", others={"you": beside})
+    player = viz.bvh_player(sample_motion, name="reference", others={"you": beside})
     try:
         assert [n for n, _ in player.scene.legend_entries()] == ["reference", "you"]
         player.sliders["frame"].value = 21
@@ -129,17 +130,17 @@ def test_bvh_player_draws_other_clips_beside_it_frame_by_frame(sample_motion):
     finally:
         player.close()
     with pytest.raises(ValueError, match=r"others\['you'\] must have the clip's shape"):
-        controls.bvh_player(sample_motion, others={"you": positions[:-1]})
+        viz.bvh_player(sample_motion, others={"you": positions[:-1]})
     bad = beside.copy()
     bad[7, 3, 1] = np.nan
     with pytest.raises(ValueError, match=r"others\['you'\] is not finite at frame 7"):
-        controls.bvh_player(sample_motion, others={"you": bad})
+        viz.bvh_player(sample_motion, others={"you": bad})
 
 
 def test_bvh_player_draws_the_targets_of_each_frame(sample_motion):
     positions, _ = sample_motion.forward_kinematics()
     targets = positions[:, -1] + [0.0, 2.0, 0.0]  # one per frame, above the last joint
-    player = controls.bvh_player(sample_motion, targets=targets)
+    player = viz.bvh_player(sample_motion, targets=targets)
     try:
         for f in (0, 17, sample_motion.n_frames - 1):
             player.sliders["frame"].value = f
@@ -147,11 +148,11 @@ def test_bvh_player_draws_the_targets_of_each_frame(sample_motion):
     finally:
         player.close()
     with pytest.raises(ValueError, match=r"targets must have shape \(\d+, 3\)"):
-        controls.bvh_player(sample_motion, targets=targets[:-1])
+        viz.bvh_player(sample_motion, targets=targets[:-1])
     bad = np.repeat(targets[:, None], 2, axis=1)
     bad[4, 1, 0] = np.inf
     with pytest.raises(ValueError, match="targets is not finite at frame 4"):
-        controls.bvh_player(sample_motion, targets=bad)
+        viz.bvh_player(sample_motion, targets=bad)
 
 
 class FakeLoop:
@@ -187,7 +188,7 @@ class FakeLoop:
 def _paced_player(motion, loop: FakeLoop, cost: list[float], **kwargs):
     """A player whose every picture costs ``cost[0]`` seconds of the fake clock; returns it
     and the list of frames it drew (in order)."""
-    player = controls.bvh_player(motion, camera="iso", clock=loop.clock,
+    player = viz.bvh_player(motion, camera="iso", clock=loop.clock,
                                  call_later=loop.call_later, **kwargs)
     shown: list[int] = []
     draw = player.show_frame
@@ -283,7 +284,7 @@ def test_playback_without_loop_stops_on_the_last_frame(sample_motion):
 
 
 def test_playback_needs_a_kernel_loop_without_call_later(sample_motion):
-    player = controls.bvh_player(sample_motion)
+    player = viz.bvh_player(sample_motion)
     try:
         with pytest.raises(RuntimeError, match="kernel"):
             player.play.value = True
@@ -294,7 +295,7 @@ def test_playback_needs_a_kernel_loop_without_call_later(sample_motion):
 def test_bvh_player_curves_follow_the_frame(sample_motion):
     n = sample_motion.n_frames
     curves = {"root height": sample_motion.root_positions[:, 1] / 100, "zero": np.zeros(n)}
-    player = controls.bvh_player(sample_motion, curves=curves)
+    player = viz.bvh_player(sample_motion, curves=curves)
     try:
         before = player.curves_image.value
         player.sliders["frame"].value = n // 2
@@ -307,7 +308,7 @@ def test_bvh_player_curves_follow_the_frame(sample_motion):
 
 @pytest.mark.parametrize("camera", ["front", "side", "top", "iso"])
 def test_bvh_player_keeps_every_frame_in_view(sample_motion, camera):
-    player = controls.bvh_player(sample_motion, camera=camera)
+    player = viz.bvh_player(sample_motion, camera=camera)
     try:
         w, h = player.scene.plotter.window_size
         uv = player.scene.project(player.positions.reshape(-1, 3))
@@ -325,7 +326,7 @@ def test_bvh_player_follow_camera_frames_every_pose_large():
     from course import data
 
     walk = data.load("cmu_12_01_walk")
-    player = controls.bvh_player(walk, camera="follow")
+    player = viz.bvh_player(walk, camera="follow")
     try:
         w, h = player.scene.plotter.window_size
         for f in range(0, walk.n_frames, 7):
@@ -341,7 +342,7 @@ def test_ik_playground_solves_and_replays():
     from course.skeleton import chain
 
     arm = chain([1.0] * 7, axes=[0, 0, 1])
-    pg = controls.ik_playground(arm, methods=["ccd"])
+    pg = viz.ik_playground(arm, methods=["ccd"])
     try:
         pg.sliders["x"].value, pg.sliders["y"].value, pg.sliders["z"].value = 3.0, 4.0, 0.0
         target = pg.target
@@ -364,7 +365,7 @@ def test_ik_playground_says_when_a_solve_started_from_the_reach_start():
     from course.skeleton import chain
 
     arm = chain([1.0] * 4, axes=[0, 0, 1])
-    pg = controls.ik_playground(arm, methods=["ccd"])
+    pg = viz.ik_playground(arm, methods=["ccd"])
     try:
         pg._dragged(np.array([2.0, 1.0, 0.0]))  # 0.56 of the reach: the given start
         assert pg.result.start == "" and "near full reach" not in pg.readout.value
@@ -382,7 +383,7 @@ def test_dragging_the_target_moves_the_sliders_and_solves_once(monkeypatch):
     from course.skeleton import chain
 
     arm = chain([1.0] * 5, axes=[0, 0, 1])
-    pg = controls.ik_playground(arm, methods=["dls"])
+    pg = viz.ik_playground(arm, methods=["dls"])
     try:
         solves = []
         solve = pg.solve
@@ -407,7 +408,7 @@ def test_the_browser_rounding_a_target_slider_to_its_steps_moves_nothing(monkeyp
     from course.skeleton import chain
 
     target = np.array([-0.6037, 1.7013, 0.0])  # between the sliders' steps
-    pg = controls.ik_playground(chain([1.0, 0.8, 0.6, 0.4], axes=[0, 0, 1]), methods=["ccd"],
+    pg = viz.ik_playground(chain([1.0, 0.8, 0.6, 0.4], axes=[0, 0, 1]), methods=["ccd"],
                                 target=target)
     try:
         first = pg.result
@@ -427,7 +428,7 @@ def test_the_browser_rounding_a_target_slider_to_its_steps_moves_nothing(monkeyp
 
 
 def test_full_body_targets_ignore_the_browser_rounding_their_sliders(sample_motion):
-    fb = controls.full_body_ik(sample_motion)
+    fb = viz.full_body_ik(sample_motion)
     try:
         name = fb.sliders["edit"].value
         before, iterations = fb.targets[name].copy(), fb.result.iterations
@@ -444,7 +445,7 @@ def test_full_body_targets_ignore_the_browser_rounding_their_sliders(sample_moti
 def test_ik_playground_convergence_plot_updates_in_place():
     from course.skeleton import chain
 
-    pg = controls.ik_playground(chain([1.0] * 7, axes=[0, 0, 1]), methods=["dls", "ccd"])
+    pg = viz.ik_playground(chain([1.0] * 7, axes=[0, 0, 1]), methods=["dls", "ccd"])
     try:
         figure = pg.convergence.figure
         pg.sliders["y"].value = pg.sliders["y"].value + 0.2
@@ -458,7 +459,7 @@ def test_ik_playground_convergence_plot_updates_in_place():
 
 
 def test_full_body_ik_reaches_the_moved_target(sample_motion):
-    fb = controls.full_body_ik(sample_motion, 10)
+    fb = viz.full_body_ik(sample_motion, 10)
     try:
         name = fb.sliders["edit"].value
         fb.sliders["y"].value = fb.sliders["y"].value + 3.0
@@ -471,7 +472,7 @@ def test_full_body_ik_reaches_the_moved_target(sample_motion):
 
 
 def test_full_body_ik_drag_moves_the_edited_target(sample_motion):
-    fb = controls.full_body_ik(sample_motion, 10)
+    fb = viz.full_body_ik(sample_motion, 10)
     try:
         name = fb.sliders["edit"].value
         goal = fb.targets[name] + [1.0, 2.0, 0.5]
@@ -485,7 +486,7 @@ def test_full_body_ik_drag_moves_the_edited_target(sample_motion):
 
 def test_full_body_ik_pulls_an_inner_joint(sample_motion):
     """Not only tips: the hand (not the hand's End Site) can be an effector, rooted at a foot."""
-    fb = controls.full_body_ik(sample_motion, 10, root="LeftFoot", effectors=["LeftHand"])
+    fb = viz.full_body_ik(sample_motion, 10, root="LeftFoot", effectors=["LeftHand"])
     try:
         fb.sliders["x"].value = fb.sliders["x"].value + 2.0
         j, foot = fb.skeleton.index("LeftHand"), fb.skeleton.index("LeftFoot")
@@ -514,7 +515,7 @@ def draggable_views(monkeypatch):
 
 def test_full_body_ik_opens_on_the_captured_pose_with_its_targets(sample_motion,
                                                                   draggable_views):
-    fb = controls.full_body_ik(sample_motion, 10)
+    fb = viz.full_body_ik(sample_motion, 10)
     try:
         assert fb.handle is not None
         name = fb.sliders["edit"].value
@@ -535,7 +536,7 @@ def test_full_body_ik_opens_on_the_captured_pose_with_its_targets(sample_motion,
 def test_ik_playground_handle_starts_on_the_target_and_a_click_moves_nothing(draggable_views):
     from course.skeleton import chain
 
-    pg = controls.ik_playground(chain([1.0] * 5, axes=[0, 0, 1]), methods=["dls"])
+    pg = viz.ik_playground(chain([1.0] * 5, axes=[0, 0, 1]), methods=["dls"])
     try:
         np.testing.assert_allclose(pg.handle.GetCenter(), pg.target, atol=1e-12)
         before = pg.scene.skeleton("solution").positions
@@ -551,21 +552,21 @@ def test_ik_playground_opens_on_the_first_method_listed():
     from course.skeleton import chain
 
     leg = chain([1.0, 1.0], axes=[0, 0, 1])
-    pg = controls.ik_playground(leg, methods=["two_link", "ccd", "dls"])
+    pg = viz.ik_playground(leg, methods=["two_link", "ccd", "dls"])
     try:
         assert pg.sliders["method"].value == "two_link"
         assert pg.readout.value.startswith("<b>two_link</b>"), pg.readout.value
     finally:
         pg.close()
     with pytest.raises(ValueError, match="method"):
-        controls.ik_playground(leg, methods=["ccd"], method="dls")
+        viz.ik_playground(leg, methods=["ccd"], method="dls")
 
 
 # -- stable layout: readouts and warnings have their room before they have their text ----------
 
 
 def test_the_lock_warning_has_reserved_room_and_the_panel_a_fixed_width():
-    ex = controls.rotation_explorer("XYZ", (30.0, 20.0, 10.0), degrees=True)
+    ex = viz.rotation_explorer("XYZ", (30.0, 20.0, 10.0), degrees=True)
     try:
         box = ex.widget.children[0]
         room = (ex.warning.layout.height, ex.readout.layout.height, box.layout.width)
@@ -580,7 +581,7 @@ def test_the_lock_warning_has_reserved_room_and_the_panel_a_fixed_width():
 
 
 def test_a_long_joint_list_keeps_its_readout_and_reset_button_in_sight(sample_motion):
-    ex = controls.fk_explorer(sample_motion.skeleton)
+    ex = viz.fk_explorer(sample_motion.skeleton)
     try:
         panel = ex.widget.children[0]
         assert panel.children[:3] == (ex.reset_button, ex.readout, ex.accordion)
@@ -595,7 +596,7 @@ def test_ik_playground_frames_its_first_target_even_out_of_reach():
 
     arm = chain([1.0] * 6, axes=[0, 0, 1])
     goal = np.array([-2.0, 5.5, 2.0])  # beyond the chain's reach of 6
-    pg = controls.ik_playground(arm, methods=["fabrik"], target=goal)
+    pg = viz.ik_playground(arm, methods=["fabrik"], target=goal)
     try:
         w, h = pg.scene.plotter.window_size
         points = np.vstack([pg.scene.skeleton("solution").positions, goal])
@@ -606,11 +607,11 @@ def test_ik_playground_frames_its_first_target_even_out_of_reach():
 
 
 def test_readouts_never_print_minus_zero_nor_one_iterations():
-    assert controls._number(-1e-17) == "+0.000" and controls._number(-0.0004) == "+0.000"
-    assert controls._number(-0.0006) == "-0.001" and controls._number(-1e-9, ".2f") == "0.00"
-    assert controls._vec([-1e-12, 1.0]) == "(+0.000, +1.000)"
-    assert "-0.000" not in controls._matrix_html(np.array([[1.0, -1e-17], [-2e-16, 1.0]]))
-    assert controls._iterations(1) == "1 iteration" and controls._iterations(0) == "0 iterations"
+    assert panel.number(-1e-17) == "+0.000" and panel.number(-0.0004) == "+0.000"
+    assert panel.number(-0.0006) == "-0.001" and panel.number(-1e-9, ".2f") == "0.00"
+    assert panel.vec([-1e-12, 1.0]) == "(+0.000, +1.000)"
+    assert "-0.000" not in panel.matrix_html(np.array([[1.0, -1e-17], [-2e-16, 1.0]]))
+    assert panel.iterations(1) == "1 iteration" and panel.iterations(0) == "0 iterations"
 
 
 def _px(length: str) -> float:
@@ -621,7 +622,7 @@ def _px(length: str) -> float:
 def test_full_body_panel_and_view_fit_side_by_side_beside_the_file_browser(sample_motion):
     """Issue 28: at 1366 px with JupyterLab's file browser open the notebook is ~1000 px wide
     (less its gutter): the panel and the view must share one line there."""
-    fb = controls.full_body_ik(sample_motion)
+    fb = viz.full_body_ik(sample_motion)
     try:
         panel, view = fb.widget.children
         assert fb.widget.layout.flex_flow == "row wrap"
@@ -645,7 +646,7 @@ def test_full_body_panel_and_view_fit_side_by_side_beside_the_file_browser(sampl
 
 
 def test_full_body_view_is_marked_stale_while_a_solve_fails(sample_motion):
-    fb = controls.full_body_ik(sample_motion, 10)
+    fb = viz.full_body_ik(sample_motion, 10)
     try:
         ik = fb.scene.skeleton("IK")
         assert not fb.stale and all(a.prop.opacity == 1.0 for a in ik.actors)

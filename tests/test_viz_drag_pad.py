@@ -18,7 +18,8 @@ import pytest  # noqa: E402
 from hypothesis import assume, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from course.viz import controls  # noqa: E402
+from course import viz  # noqa: E402
+from course.viz import panel  # noqa: E402
 from course.viz.drag_pad import ViewPlaneDrag  # noqa: E402
 
 finite = st.floats(-3.0, 3.0)
@@ -87,7 +88,7 @@ def test_a_planar_arm_is_seen_face_on_and_dragged_in_its_plane():
     from course.skeleton import chain
 
     arm = chain([1.0, 0.8, 0.6, 0.4], axes=[0, 0, 1])  # hinges about z: the xy plane
-    pg = controls.ik_playground(arm, methods=["dls"])
+    pg = viz.ik_playground(arm, methods=["dls"])
     try:
         assert pg.scene._camera == "front"
         np.testing.assert_allclose(pg.drag.depth_axis, [0.0, 0.0, 1.0])
@@ -98,7 +99,7 @@ def test_a_planar_arm_is_seen_face_on_and_dragged_in_its_plane():
             assert pg.result.converged, (uv, pg.result.reason)
     finally:
         pg.close()
-    ball = controls.ik_playground(chain([1.0, 0.8]), methods=["dls"])  # ball joints
+    ball = viz.ik_playground(chain([1.0, 0.8]), methods=["dls"])  # ball joints
     try:
         assert ball.scene._camera == "iso"
         cam = ball.scene.plotter.camera
@@ -111,7 +112,7 @@ def test_a_planar_arm_is_seen_face_on_and_dragged_in_its_plane():
 def test_ik_playground_target_follows_the_pad_and_the_pad_the_sliders():
     from course.skeleton import chain
 
-    pg = controls.ik_playground(chain([1.0] * 4, axes=[0, 0, 1]), methods=["dls"])
+    pg = viz.ik_playground(chain([1.0] * 4, axes=[0, 0, 1]), methods=["dls"])
     try:
         assert pg.handle is None and pg.drag is not None  # a static view takes no mouse
         pg.drag.pad.uv = [0.4, -0.3]
@@ -133,7 +134,7 @@ def test_ik_playground_target_follows_the_pad_and_the_pad_the_sliders():
 def test_full_body_ik_pad_drags_the_edited_effector():
     from course import data
 
-    fb = controls.full_body_ik(data.load("wave"))
+    fb = viz.full_body_ik(data.load("wave"))
     try:
         name = fb.sliders["edit"].value
         uv = np.array(fb.drag.pad.uv) * 0.5 + [0.2, 0.1]
@@ -155,7 +156,7 @@ def test_the_plane_normal_is_found_only_for_hinges_about_one_world_axis():
         n = skeleton.n_joints
         local = np.tile([1.0, 0, 0, 0], (n, 1)) if local is None else local
         _, rot = skeleton.forward_kinematics(local, np.zeros(3))
-        return controls._hinge_plane_normal(skeleton, controls._ancestors(skeleton, n - 1), rot)
+        return panel.hinge_plane_normal(skeleton, panel.ancestors(skeleton, n - 1), rot)
 
     np.testing.assert_allclose(normal(chain([1.0, 1.0], axes=[0, 0, 1])), [0, 0, 1])
     # a hinge's world axis is Q_j a_j: a bent start about the same axis keeps it
@@ -165,13 +166,13 @@ def test_the_plane_normal_is_found_only_for_hinges_about_one_world_axis():
                                atol=1e-12)
     assert normal(chain([1.0, 1.0])) is None  # ball joints
     assert normal(chain([1.0, 1.0], axes=[[0, 0, 1], [1, 0, 0]])) is None  # two axes
-    assert controls._ancestors(chain([1.0, 1.0, 1.0]), 3) == [2, 1, 0]
+    assert panel.ancestors(chain([1.0, 1.0, 1.0]), 3) == [2, 1, 0]
 
 
 def test_a_planar_arm_is_posed_face_on_in_the_fk_explorer():
     from course.skeleton import chain
 
-    fk = controls.fk_explorer(chain([1.0, 0.8, 0.5], axes=[0, 0, 1]))
+    fk = viz.fk_explorer(chain([1.0, 0.8, 0.5], axes=[0, 0, 1]))
     try:
         assert fk.scene._camera == "front"
         w, h = fk.scene.plotter.window_size
@@ -181,7 +182,7 @@ def test_a_planar_arm_is_posed_face_on_in_the_fk_explorer():
             assert np.all((xy > 0) & (xy < [w, h])), value
     finally:
         fk.close()
-    assert controls.fk_explorer(chain([1.0, 0.8])).scene._camera == "iso"  # ball joints
+    assert viz.fk_explorer(chain([1.0, 0.8])).scene._camera == "iso"  # ball joints
 
 
 # The pad's own JavaScript, run in node with the little of the DOM it uses: a pointer at
@@ -271,7 +272,7 @@ def test_full_body_pad_corners_are_the_target_sliders_limits():
     corners are their limits, its middle their middles, and the third slider is kept."""
     from course import data
 
-    fb = controls.full_body_ik(data.load("wave"))
+    fb = viz.full_body_ik(data.load("wave"))
     try:
         lo = np.array([fb.sliders[c].min for c in "xyz"])
         hi = np.array([fb.sliders[c].max for c in "xyz"])

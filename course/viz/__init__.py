@@ -28,14 +28,11 @@ _EXPORTS = {
         "draw_frame",
         "slerp_arc_figure",
     ),
-    "controls": (
-        "rotation_explorer",
-        "slerp_explorer",
-        "fk_explorer",
-        "bvh_player",
-        "ik_playground",
-        "full_body_ik",
-    ),
+    "rotation_views": ("rotation_explorer", "slerp_explorer"),
+    "fk_view": ("fk_explorer",),
+    "clip_player": ("bvh_player",),
+    "ik_playground_view": ("ik_playground",),
+    "full_body_ik_view": ("full_body_ik",),
     "cloth": ("ClothScene", "ClothSimulator", "cloth_simulator"),
 }
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}

@@ -23,8 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import Array
-from .controls import Control
-from .panel import fixed_height, on_value, readout_box, slider_style
+from .panel import Control, fixed_height, on_value, readout_box, slider_style
 from .scene import GHOST, SkeletonScene
 
 #: steps a slider offers (s): 1/1200 .. 1/60
