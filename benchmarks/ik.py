@@ -35,7 +35,6 @@ import warnings
 import numpy as np
 
 from course.ik import METHODS, fabrik_batch, solve
-from course.ik.api import _solve
 from course.rotations import quat_from_axis_angle
 from course.skeleton import chain
 
@@ -163,9 +162,9 @@ def reach_table(engine: str = "auto", reach_start: bool = True) -> None:
                 for sk, t in reach_problems(joints, fraction):
                     if method == "two_link" and sk.n_joints != 3:
                         continue
-                    r = _solve(sk, np.tile([1.0, 0, 0, 0], (sk.n_joints, 1)), np.zeros(3),
-                               {"end_effector": t}, method=method, tol=TOL, engine=engine,
-                               reach_start=reach_start)
+                    r = solve(sk, np.tile([1.0, 0, 0, 0], (sk.n_joints, 1)), np.zeros(3),
+                              {"end_effector": t}, method=method, tol=TOL, engine=engine,
+                              reach_start=reach_start)
                     ok += bool(r.converged)
                     its.append(r.iterations)
                     seeded += r.start == "reach"

@@ -15,7 +15,6 @@ from hypothesis import strategies as st
 from course.ik import SwingTwist, Target, hand_targets, solve
 from course.ik._engine.components import clamp_swing_twist as clamp_components
 from course.ik._engine.ops import ARRAYS, FLOATS
-from course.ik.api import _solve
 from course.rotations import (
     clamp_swing_twist,
     quat_conjugate,
@@ -145,8 +144,8 @@ def _violation(sk, local, limits):
 @given(limited_trees(), st.sampled_from(ITERATIVE), st.sampled_from(["auto", "tree"]))
 def test_every_limit_holds_at_every_iteration(tree, method, engine):
     sk, start, limits, root, targets = tree
-    r = _solve(sk, start, np.zeros(3), targets, method=method, root=root, limits=limits,
-               record=True, max_iter=25, engine=engine)
+    r = solve(sk, start, np.zeros(3), targets, method=method, root=root, limits=limits,
+              record=True, max_iter=25, engine=engine)
     assert len(r.frames) == r.iterations + 1
     for frame in r.frames:
         assert _violation(sk, frame["local_rotations"], limits) <= SLACK
@@ -167,7 +166,7 @@ def test_swing_twist_fast_path_agrees_with_general_model(method):
     floats, a batch in arrays) and the tree engine reach the same poses."""
     rng = np.random.default_rng(5)
     targets = rng.normal(size=(5, 3)) * 2.0 + [2.5, 0, 0]
-    run = {e: functools.partial(_solve, ARM, ARM_START, np.zeros(3), method=method,
+    run = {e: functools.partial(solve, ARM, ARM_START, np.zeros(3), method=method,
                                 limits=CONES, max_iter=40, engine=e) for e in ("chain", "tree")}
     batch = run["chain"]({"end_effector": targets})
     for i, t in enumerate(targets):

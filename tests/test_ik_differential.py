@@ -22,7 +22,6 @@ import pytest
 import course.rotations as rot
 from course import ik
 from course.ik import SwingTwist, Target
-from course.ik.api import _solve
 from course.ik.jacobian import chain_jacobian, dls_step, pinv_step, transpose_step
 from course.skeleton import chain
 
@@ -50,8 +49,8 @@ def _bent(n: int, seed: int, hinge_axes: np.ndarray | None = None):
 
 
 def _one(sk, pose, goal, method, engine, **options):
-    return _solve(sk, pose, np.zeros(3), {sk.n_joints - 1: goal}, method, max_iter=1,
-                  tol=1e-12, reach_start=False, engine=engine, **options)
+    return ik.solve(sk, pose, np.zeros(3), {sk.n_joints - 1: goal}, method, max_iter=1,
+                    tol=1e-12, reach_start=False, engine=engine, **options)
 
 
 @pytest.mark.parametrize("seed", SEEDS)
@@ -151,8 +150,8 @@ def test_whole_solves_chain_and_tree_agree(problem, method):
     _, sk, targets, limits = problem
     tol = 1e-4
     pose = np.tile(rot.quat_identity(), (sk.n_joints, 1))
-    results = [_solve(sk, pose, np.zeros(3), targets, method, tol=tol, limits=limits, engine=e)
-               for e in ENGINES]
+    results = [ik.solve(sk, pose, np.zeros(3), targets, method, tol=tol, limits=limits,
+                        engine=e) for e in ENGINES]
     goal = targets[7]
     for r in results:
         residual = np.linalg.norm(sk.forward_kinematics(r.local_rotations)[0][-1] - goal)
@@ -176,8 +175,8 @@ def test_orientation_targets_reached_on_tree_and_auto(seed, method):
     pos, ori = sk.forward_kinematics(q)
     pose = np.tile(rot.quat_identity(), (6, 1))
     for engine in ("tree", "auto"):
-        r = _solve(sk, pose, np.zeros(3), {5: Target(pos[5], ori[4])}, method, tol=1e-4,
-                   max_iter=2000, engine=engine)
+        r = ik.solve(sk, pose, np.zeros(3), {5: Target(pos[5], ori[4])}, method, tol=1e-4,
+                     max_iter=2000, engine=engine)
         p, Q = sk.forward_kinematics(r.local_rotations)
         assert r.converged, (engine, r.reason)
         assert np.linalg.norm(p[5] - pos[5]) < 1e-4

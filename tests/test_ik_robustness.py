@@ -312,21 +312,19 @@ def test_near_full_reach_every_method_converges(method, engine):
     (beside a target at half the reach, which keeps its start) and alone, on every engine,
     from the reach-aware start (which the result names). Before: at 0.999 CCD, FABRIK and
     the transpose converged on 0-1 of 40 chains, DLS on 17-21; at 0.95 CCD on 15-16."""
-    from course.ik.api import _solve
-
     for joints in ("ball", "hinge"):
         for sk, targets in _near_reach_chains(joints, 12, seed=41):
             start = np.tile([1.0, 0, 0, 0], (sk.n_joints, 1))
             batch = np.vstack([targets[:2], 0.5 / NEAR[2] * targets[2:3], targets[2:]])
-            r = _solve(sk, start, np.zeros(3), {"end_effector": batch}, method=method,
-                       engine=engine)
+            r = solve(sk, start, np.zeros(3), {"end_effector": batch}, method=method,
+                      engine=engine)
             near = np.array([True, True, False, True, True])
             assert r.converged[near].all(), (joints, r.reason, r.error)
             assert np.all(_fk_residual(sk, r, batch)[near] < 1e-4)
             assert list(r.start) == ["reach", "reach", "", "reach", "reach"]
             for i in (1, 2):
-                one = _solve(sk, start, np.zeros(3), {"end_effector": batch[i]}, method=method,
-                             engine="tree" if engine == "tree" else "auto")
+                one = solve(sk, start, np.zeros(3), {"end_effector": batch[i]}, method=method,
+                            engine="tree" if engine == "tree" else "auto")
                 assert one.start == r.start[i] and one.converged == r.converged[i]
                 np.testing.assert_allclose(one.positions, r.positions[i], atol=1e-9)
 
@@ -336,8 +334,6 @@ def test_beyond_reach_the_stretched_start_is_final(method):
     """Beyond the reach the reach-aware start is the stretched pose, the answer: no
     iteration follows (before, DLS iterated 8 more times on it and drifted 4e-8 off the line
     amplifying rounding, while the error could not fall)."""
-    from course.ik.api import _solve
-
     rng = np.random.default_rng(42)
     for _ in range(6):
         sk = chain(rng.normal(size=(int(rng.integers(2, 7)), 3)))
@@ -347,8 +343,8 @@ def test_beyond_reach_the_stretched_start_is_final(method):
         along = np.cumsum(np.r_[0.0, sk.bone_lengths[1:]])
         start = np.tile([1.0, 0, 0, 0], (sk.n_joints, 1))
         for engine in ("auto", "tree"):
-            r = _solve(sk, start, np.zeros(3), {"end_effector": 1.5 * far * u}, method=method,
-                       engine=engine)
+            r = solve(sk, start, np.zeros(3), {"end_effector": 1.5 * far * u}, method=method,
+                      engine=engine)
             assert list(r.reason) == ["unreachable"] * 3 and list(r.start) == ["reach"] * 3
             assert np.all(r.iterations <= (1 if method == "fabrik" else 0))  # FABRIK: its pass
             np.testing.assert_allclose(r.positions, along[:, None] * u[:, None], atol=1e-12)
@@ -574,14 +570,13 @@ def test_property_trees_at_and_near_full_reach(problem):
     is within tol, a documented reason (never the cap at 0 iterations) and start, the batch
     equal to single solves; and a free ball chain reaches every target from 0.95 of its reach
     to full reach, from the reach-aware start, and stretches at one beyond."""
-    from course.ik.api import _solve
     from course.skeleton import Ball, Hinge
 
     sk, start, root, targets, limits, frac, method, engine = problem
     tol, names = 1e-4, list(targets)
     kwargs = dict(method=method, root=root, tol=tol, max_iter=40, limits=limits, engine=engine)
     try:
-        r = _solve(sk, start, np.zeros(3), targets, **kwargs)
+        r = solve(sk, start, np.zeros(3), targets, **kwargs)
     except ValueError as e:  # every joint between an effector and the fixed joint is fixed
         assert "can move it" in str(e)
         return
@@ -614,8 +609,8 @@ def test_property_trees_at_and_near_full_reach(problem):
             assert np.all(np.abs(angle[moved]) <= limits[f"j{j}"] + 1e-9)
     if len(frac) <= 3:
         for i in range(len(frac)):
-            one = _solve(sk, start, np.zeros(3), {k: t[i] for k, t in targets.items()},
-                         **kwargs)
+            one = solve(sk, start, np.zeros(3), {k: t[i] for k, t in targets.items()},
+                        **kwargs)
             np.testing.assert_allclose(one.positions, r.positions[i], atol=1e-9)
             assert one.start == r.start[i]
     (effector,) = [sk.index(k) for k in names] if len(names) == 1 else [None]

@@ -191,6 +191,7 @@ def test_bad_input_names_the_argument():
         (dict(targets={"end_effector": (t, [1, 0, 0, 0])}, method="two_link"), "targets"),
         (dict(weights={"joint1": -1.0}), "weights"),
         (dict(damping=0.1, method="ccd"), "options"),
+        (dict(engine="fast"), "engine"),
     ]
     for kwargs, word in cases:
         args = dict(skeleton=BALL, local_rotations=IDENT, root_position=np.zeros(3),
@@ -346,9 +347,7 @@ def _solver(engine: str):
     """``solve`` on one engine: ``"tree"`` (the general model), ``"chain"`` (the serial fast
     path, a batch of any size on the array engine, every component an ndarray (B,): small
     batches would otherwise solve one problem at a time) or ``"auto"`` (as ``solve``)."""
-    from course.ik.api import _solve
-
-    return functools.partial(_solve, engine=engine)
+    return functools.partial(solve, engine=engine)
 
 
 def _hinge_angles(local: np.ndarray) -> np.ndarray:
@@ -571,7 +570,6 @@ def test_every_solver_gets_a_frozen_run_and_its_methods_options_record(method, m
 
     from course.ik._engine.chain_solvers import ChainRun
     from course.ik._engine.tree import Problem
-    from course.ik.api import _solve
     from course.ik.methods import REGISTRY
 
     spec, calls = REGISTRY[method], []
@@ -590,8 +588,8 @@ def test_every_solver_gets_a_frozen_run_and_its_methods_options_record(method, m
                "jacobian_transpose": {"max_step": 0.25}, "pseudo_inverse": {"max_step": 0.25},
                "dls": {"max_step": 0.25}}[method]
     for engine in ("chain", "tree"):
-        _solve(arm, start, np.zeros(3), {"end_effector": [1.0, 1.0, 0]}, method=method, tol=1e-3,
-               engine=engine, **options)
+        solve(arm, start, np.zeros(3), {"end_effector": [1.0, 1.0, 0]}, method=method, tol=1e-3,
+              engine=engine, **options)
     kinds = [type(args[0]) for args in calls]
     assert kinds == ([ChainRun, Problem] if spec.chain is not None else [Problem, Problem])
     for *head, record in calls:

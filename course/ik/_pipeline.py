@@ -32,7 +32,7 @@ from .result import IKResult, SwingTwist, Target
 
 # Which engine runs a solve: "auto" (the serial-chain fast path for a chain, small batches one
 # problem at a time), "chain" (the fast path for any batch, in arrays) or "tree" (always the
-# general engine). Only tests and benchmarks ask for anything but "auto".
+# general engine): ``solve``'s ``engine`` keyword.
 Engine = Literal["auto", "chain", "tree"]
 
 

@@ -33,6 +33,8 @@ def solve(
     limits: Mapping[str | int, Any] | None = None,
     record: bool = False,
     reach_start: bool = True,
+    *,
+    engine: Engine = "auto",
     **options: Any,
 ) -> IKResult:
     r"""Move a skeleton's joints so that the end effectors reach their targets.
@@ -97,6 +99,14 @@ def solve(
         default). False: every iterative method from the given pose alone, as the lecture's
         loop runs it (near the reach it crawls, beyond it may end off the stretched pose):
         to compare with a plain implementation.
+    engine : {"auto", "chain", "tree"}
+        Which implementation runs the method. ``"tree"``: the general engine, which walks
+        the paths of any joint tree; ``"chain"``: the serial-chain engine, which runs a whole
+        batch in arrays (used only where the paths are one chain, else ``"tree"``);
+        ``"auto"`` (the default) takes the chain engine for a chain, a small batch one
+        problem at a time. Each iteration is the lecture tier's (:mod:`course.ik.ccd`,
+        :mod:`course.ik.fabrik`, :mod:`course.ik.jacobian`) to rounding, in another layout:
+        the choice is speed, not the answer.
     **options
         ``damping`` (DLS :math:`\lambda`, a length in [0, 1e50]), ``rcond`` (pseudo-inverse
         cutoff, in [0, 1)), ``max_step`` (largest joint step per Jacobian iteration, radians,
@@ -116,21 +126,8 @@ def solve(
         an effector no joint on its path can move; a two-link solve whose path is not two
         bones.
     """
-    return _solve(skeleton, local_rotations, root_position, targets, method, root, tol,
-                  max_iter, weights, limits, record, reach_start, engine="auto", **options)
-
-
-def _solve(skeleton: Any, local_rotations: ArrayLike, root_position: ArrayLike,
-           targets: Mapping[str | int, Any], method: str = "dls", root: str | int | None = None,
-           tol: float = 1e-4, max_iter: int | None = None,
-           weights: Mapping[str | int, float] | None = None,
-           limits: Mapping[str | int, Any] | None = None, record: bool = False,
-           reach_start: bool = True, *, engine: Engine = "auto", **options: Any) -> IKResult:
-    """:func:`solve` on the chosen ``engine`` (see :data:`Engine`)."""
     if engine not in ("auto", "chain", "tree"):
         raise ValueError(f"engine: expected 'auto', 'chain' or 'tree', got {engine!r}")
     req = validate(skeleton, local_rotations, root_position, targets, method, root, tol,
                     max_iter, weights, limits, record, options, reach_start)
     return run(req, engine)
-
-
