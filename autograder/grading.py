@@ -340,8 +340,17 @@ def _grader_digest() -> str:
 def _on_pool(assignment: Assignment, todo: list[tuple[Submission, Job | None]], jobs: int,
              seed: str | None, limits: Limits, level: str
              ) -> Iterator[tuple[str, dict[str, Any]]]:
-    """``(name, record)`` of each submission as it is graded here, by ``jobs`` threads."""
-    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+    """``(name, record)`` of each submission as it is graded here, by ``jobs`` threads.
+
+    With more than one, numpy's BLAS runs on one thread of its own. A thread that starts a
+    sandbox as root does it with fork() (Popen's user switch rules out vfork), and OpenBLAS's
+    fork handler stops its worker threads under any product another thread is computing:
+    a5's diagnosis then never returned from ``inv`` (--jobs 2, an hour at 100 % CPU).
+    """
+    from threadpoolctl import threadpool_limits
+
+    with (threadpool_limits(1 if jobs > 1 else None, user_api="blas"),
+          ThreadPoolExecutor(max_workers=max(1, jobs)) as pool):
         futures = {pool.submit(_grade_one, assignment, s, seed, limits, level): (s, job)
                    for s, job in todo}
         for future in as_completed(futures):

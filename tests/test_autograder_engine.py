@@ -193,3 +193,40 @@ def test_a_mistake_is_recognised_one_way_only():
         Misconception("k", "f", "t", "e", symptom=lambda *a: True, caused_by="g")
     with pytest.raises(ValueError, match="exactly one"):
         Misconception("k", "f", "t", "e")
+
+
+FORK_WHILE_INVERTING = """
+import os, subprocess, sys, time, types
+import numpy as np
+import autograder.grading as grading
+
+def grade_one(assignment, s, seed, limits, level):
+    end = time.monotonic() + 2.0
+    while time.monotonic() < end:
+        if s.name == "starts sandboxes":  # Popen's user switch rules out vfork: fork()
+            subprocess.run(["true"], user=os.getuid(), check=True)
+        else:  # a diagnosis: a5's Newton iterates invert the Hessian
+            np.linalg.inv(np.eye(150) * 3.0 + np.ones((150, 150)))
+    return s.name
+
+grading._grade_one = grade_one
+grading.record = lambda name, result, digest: result
+todo = [(types.SimpleNamespace(name=n), None) for n in ("starts sandboxes", "diagnoses")]
+print(sorted(name for name, _ in grading._on_pool(None, todo, 2, None, None, "plain")))
+"""
+
+
+@pytest.mark.skipif(os.name != "posix", reason="fork() is POSIX")
+def test_grading_threads_may_fork_while_another_computes(tmp_path):
+    """Two grading threads: one starts processes with fork() (as the sandbox does as root, to
+    switch user), the other inverts matrices (as a5's diagnosis does). Before, OpenBLAS's
+    fork handler stopped its thread pool under the running ``inv``, which never returned:
+    ``grade --jobs 2`` of the a5 fixtures hung (an hour at 100 % CPU); the grading pool now
+    runs BLAS on one thread. Run in a process of its own, so a hang fails within a minute."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", FORK_WHILE_INVERTING], capture_output=True,
+                          text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split("\n")[0] == "['diagnoses', 'starts sandboxes']"
