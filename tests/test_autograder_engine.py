@@ -217,7 +217,7 @@ print(sorted(name for name, _ in grading._on_pool(None, todo, 2, None, None, "pl
 
 
 @pytest.mark.skipif(os.name != "posix", reason="fork() is POSIX")
-def test_grading_threads_may_fork_while_another_computes(tmp_path):
+def test_grading_threads_may_fork_while_another_computes():
     """Two grading threads: one starts processes with fork() (as the sandbox does as root, to
     switch user), the other inverts matrices (as a5's diagnosis does). Before, OpenBLAS's
     fork handler stopped its thread pool under the running ``inv``, which never returned:

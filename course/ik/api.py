@@ -104,9 +104,11 @@ def solve(
         the paths of any joint tree; ``"chain"``: the serial-chain engine, which runs a whole
         batch in arrays (used only where the paths are one chain, else ``"tree"``);
         ``"auto"`` (the default) takes the chain engine for a chain, a small batch one
-        problem at a time. Each iteration is the lecture tier's (:mod:`course.ik.ccd`,
-        :mod:`course.ik.fabrik`, :mod:`course.ik.jacobian`) to rounding, in another layout:
-        the choice is speed, not the answer.
+        problem at a time. Each engine runs the lecture tier's step (:mod:`course.ik.ccd`,
+        :mod:`course.ik.fabrik`, :mod:`course.ik.jacobian`) in another layout: one iteration
+        agrees to rounding and whole solves meet the same targets within ``tol``
+        (``tests/test_ik_differential.py``), though rounding may settle two engines on
+        different poses of the same residual. The choice is speed.
     **options
         ``damping`` (DLS :math:`\lambda`, a length in [0, 1e50]), ``rcond`` (pseudo-inverse
         cutoff, in [0, 1)), ``max_step`` (largest joint step per Jacobian iteration, radians,
