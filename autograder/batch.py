@@ -17,7 +17,9 @@ from .summary import facts
 def record(name: str, result: Result, digest: str = "") -> dict[str, Any]:
     """What the batch keeps of a graded submission, as plain data (a cluster's worker sends
     it back): its ``results.json``, its row and header of ``grades.csv``, the facts the
-    class summary needs, and the digest of what was graded ("" for nothing to resume)."""
+    class summary needs, and the digest of what was graded ("" for nothing to resume: a
+    submission not graded is graded again by ``--resume``)."""
     return {"results": results_json(result, f"Graded {result.submission.name}."),
             "row": csv_row(name, result),
-            "header": csv_header(result), "facts": facts(name, result), "digest": digest}
+            "header": csv_header(result), "facts": facts(name, result),
+            "digest": "" if result.not_graded else digest}

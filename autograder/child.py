@@ -122,6 +122,9 @@ def main() -> None:
         allowed=_allowed_modules(config["allowed"]),
         nt_paths=nt_paths,
     ))
+    # Before the submission's first instruction: a start that ends before this frame is the
+    # machine's fault (the sandbox, the interpreter), never the submission's.
+    protocol.write_frame(res, {"op": "started"})
     try:
         module = _load_module("submission", config["submission"])
     except BaseException as exc:  # noqa: B036  (SystemExit at import is the submission's)

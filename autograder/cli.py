@@ -9,14 +9,18 @@ import stat
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from .assignments import KEYS, load
 from .grading import collect, grade
 from .lms import FILES as LMS_FILES
-from .report import text
+from .report import NOT_GRADED, text
 from .runner import default_submission, read_seed, run, seed_from_env
-from .sandbox import FLOOR, LEVELS, level_for, weaker_warning
+from .sandbox import FLOOR, LEVELS, Isolation, level_for, weaker_warning
+from .spec import Assignment
 from .submission import printable
+
+NOT_GRADED_EXIT = 3  # grade's exit status when a submission could not be graded
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -80,22 +84,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         parser.error(str(exc))
     if args.command == "check":
-        path = args.submission or default_submission(spec)
-        try:
-            mode = os.lstat(path).st_mode  # a link or pipe is refused in the report
-        except OSError as exc:
-            parser.error(f"submission: {printable(path)} "
-                         + ("does not exist" if isinstance(exc, FileNotFoundError)
-                            else f"cannot be read ({exc.strerror})"))
-        if stat.S_ISDIR(mode):
-            parser.error(f"submission: {printable(path)} is a folder: give a .py or .ipynb "
-                         "file")
-        result = run(spec, path, seed, level=level)
-        print(text(result))
-        if level.rank > FLOOR.rank:  # a laptop: fine for one's own work, not for a class
-            print(f"(Checked at isolation {level}: fine for your own code; a class is graded "
-                  f"at {FLOOR} or stronger.)", file=sys.stderr)
-        return 0 if result.score >= result.max_score else 1
+        return _check(parser, args, spec, seed, level)
     if args.scheduler and args.isolation:
         parser.error("--isolation: with --scheduler each worker grades at its strongest; "
                      "give --min-isolation instead")
@@ -123,11 +112,50 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, ValueError) as exc:  # grades.csv cannot be written, a worker too weak...
         print(f"error: {exc}", file=sys.stderr)
         return 1
-    mean = sum(r["score"] for r in rows) / len(rows)
-    print(f"graded {len(rows)} submissions in {time.monotonic() - start:.1f} s; mean score "
-          f"{mean:.2f} / {rows[0]['max_score']:g}; results in "
-          f"{printable(args.out / 'grades.csv')}",
+    return _graded(rows, args.out, time.monotonic() - start)
+
+
+def _check(parser: argparse.ArgumentParser, args: argparse.Namespace, spec: Assignment,
+           seed: str | None, level: Isolation) -> int:
+    """``check``: one submission's report; exit status 0 for full marks, 1 for fewer,
+    :data:`NOT_GRADED_EXIT` if the machine could not grade it."""
+    path = args.submission or default_submission(spec)
+    try:
+        mode = os.lstat(path).st_mode  # a link or pipe is refused in the report
+    except OSError as exc:
+        parser.error(f"submission: {printable(path)} "
+                     + ("does not exist" if isinstance(exc, FileNotFoundError)
+                        else f"cannot be read ({exc.strerror})"))
+    if stat.S_ISDIR(mode):
+        parser.error(f"submission: {printable(path)} is a folder: give a .py or .ipynb "
+                     "file")
+    result = run(spec, path, seed, level=level)
+    print(text(result))
+    if level.rank > FLOOR.rank:  # a laptop: fine for one's own work, not for a class
+        print(f"(Checked at isolation {level}: fine for your own code; a class is graded "
+              f"at {FLOOR} or stronger.)", file=sys.stderr)
+    if result.not_graded:
+        return NOT_GRADED_EXIT
+    return 0 if result.score >= result.max_score else 1
+
+
+def _graded(rows: list[dict[str, Any]], out: Path, seconds: float) -> int:
+    """What ``grade`` says at the end, and its exit status: :data:`NOT_GRADED_EXIT` if a
+    submission could not be graded."""
+    missed = [r for r in rows if r["status"] == NOT_GRADED]
+    scores = [r["score"] for r in rows if r["status"] != NOT_GRADED]
+    mean = f"{sum(scores) / len(scores):.2f}" if scores else "-"
+    some = f"{len(scores)} of " if missed else ""
+    print(f"graded {some}{len(rows)} submissions in {seconds:.1f} s; mean score "
+          f"{mean} / {rows[0]['max_score']:g}; results in {printable(out / 'grades.csv')}",
           file=sys.stderr)
+    if missed:
+        names = ", ".join(printable(r["submission"]) for r in missed[:10])
+        more = f" and {len(missed) - 10} more" if len(missed) > 10 else ""
+        print(f"error: {len(missed)} submission{'s' * (len(missed) > 1)} not graded, the "
+              f"grading machine's fault (no score written): {names}{more}. Run the same "
+              "command again with --resume to grade exactly those.", file=sys.stderr)
+        return NOT_GRADED_EXIT
     return 0
 
 

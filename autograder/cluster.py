@@ -13,8 +13,9 @@ Before any work, each worker reports the isolation level it reached, and a worke
 with its name; a worker that joins later checks the same before each task. A worker that dies
 while grading costs only a retry of the submissions it held: the scheduler runs them again
 elsewhere, up to its ``distributed.scheduler.allowed-failures`` times (:data:`RETRIES` on a
-``local`` cluster); a submission that kills every worker it meets scores 0 with a reason that
-says so. A task that raises is tried again :data:`RETRIES` times too.
+``local`` cluster); a submission that kills every worker it meets, or that the machine could
+not grade, is *not graded* (no score; ``grade`` exits non-zero and ``--resume`` grades it again).
+A task that raises is tried again :data:`RETRIES` times too.
 
 ``local[:N]`` starts a ``LocalCluster`` of N single-threaded worker processes on this machine
 (N: one per CPU when not given). Dask is the optional extra ``cluster``
@@ -34,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 
 from .batch import record
 from .limits import Limits
-from .records import Job, grader_failed, not_run
+from .records import Job, grader_failed, not_graded
 from .sandbox import FLOOR, LEVELS, Isolation, probe
 
 if TYPE_CHECKING:
@@ -101,12 +102,11 @@ def grade_on_cluster(assignment: Assignment, jobs: list[Job], scheduler: str, *,
                 except WeakWorker as exc:
                     raise ValueError(f"--min-isolation {minimum}: {exc}") from None
                 except KilledWorker:
-                    rec = record(job.name, not_run(
+                    rec = record(job.name, not_graded(
                         assignment, Path(job.label), seed, Isolation(minimum),
                         "every worker that graded this submission died while grading it "
                         f"({1 + _allowed_failures(client)} attempts): the sandbox should make "
-                        "that impossible; please report this",
-                        "not run: the grading worker died on every attempt"))
+                        "that impossible; please report this"))
                 except Exception as exc:  # a bug of ours, raised on every attempt
                     rec = record(job.name, grader_failed(assignment, Path(job.label), seed,
                                                          Isolation(minimum), exc))

@@ -109,6 +109,9 @@ def header(result: Result) -> list[str]:
     if not result.hidden_run:
         lines.append("Visible tests only: hidden tests run when your instructor grades "
                      "(with a secret seed).")
+    if result.not_graded:
+        lines.append(f"Not graded: {bounded(result.not_graded)}. This is the grading machine's "
+                     "fault, not your code's; nothing was scored, so grading it again is safe.")
     lines += [f"Refused: {bounded(p)}" for p in result.problems]
     lines += [f"Note: {bounded(n)}" for n in result.notes]
     if ISOLATION_NOTES.get(result.isolation):

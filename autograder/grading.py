@@ -40,6 +40,7 @@ from .lms import FILES as LMS_FILES
 from .lms import export
 from .output import create, write_csv
 from .records import Job, Submission, grader_failed, not_run
+from .report import NOT_GRADED
 from .results import Result
 from .runner import run
 from .sandbox import FLOOR, level_for
@@ -237,7 +238,8 @@ def grade(assignment: Assignment, submissions: Sequence[Submission | tuple[str, 
     ``local[:N]``, to grade on a cluster instead (:mod:`autograder.cluster`, whose workers
     must reach ``min_isolation``); without it no Dask is imported. ``resume``: a submission
     whose files, assignment, seed, limits and grader are those recorded in
-    ``out/<name>/grading.json`` is not graded again.
+    ``out/<name>/grading.json`` is not graded again (one *not graded*, the machine's or the
+    grader's fault, always is: its row's status says so and its score is empty).
 
     Names are made safe and unique again (:func:`unique`: unchanged for :func:`collect`'s);
     a submission that cannot be read gets score 0 and the reason, like any refused one.
@@ -282,9 +284,10 @@ def grade(assignment: Assignment, submissions: Sequence[Submission | tuple[str, 
     if ordered:
         write_csv(_output(root, "grades.csv"), ordered[0]["header"], [r["row"] for r in ordered])
         _write_summary(_output(root, "summary.html"), assignment, [r["facts"] for r in ordered])
-        for kind in lms:
+        for kind in lms:  # a submission not graded is left out: its LMS grade stays as it is
             export(kind, _output(root, LMS_FILES[kind]), assignment,
-                   [(s, r["row"]) for s, r in zip(subs, ordered, strict=True)])
+                   [(s, r["row"]) for s, r in zip(subs, ordered, strict=True)
+                    if r["row"]["status"] != NOT_GRADED])
     return [r["row"] for r in ordered]
 
 

@@ -42,10 +42,19 @@ class Job:
 
 def grader_failed(assignment: Assignment, path: Path, seed: str | None, level: str,
                   exc: BaseException) -> Result:
-    """The result of a submission the grader itself failed on."""
-    return not_run(assignment, path, seed, level,
-                   f"the grader failed ({type(exc).__name__}: {exc}); please report this",
-                   "not run: the grader failed on this submission")
+    """The result of a submission the grader itself failed on: not graded."""
+    return not_graded(assignment, path, seed, level,
+                      f"the grader failed ({type(exc).__name__}: {exc}); please report this")
+
+
+def not_graded(assignment: Assignment, path: Path, seed: str | None, level: str,
+               why: str) -> Result:
+    """A result with no score: the machine or the grader, not the submission, failed
+    (``why``). It is graded again by ``grade --resume``."""
+    result = not_run(assignment, path, seed, level, "", "not run: the submission could not be "
+                     "graded (see above)")
+    result.problems, result.not_graded = [], why
+    return result
 
 
 def not_run(assignment: Assignment, path: Path, seed: str | None, level: str, problem: str,

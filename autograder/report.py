@@ -43,11 +43,24 @@ def _scope(result: Result) -> str:
     return scope
 
 
+def _shown(result: Result) -> list[TestResult]:
+    """The tests a report lists: none for a submission not graded (none ran)."""
+    return [] if result.not_graded else result.tests
+
+
+def _total(result: Result) -> str:
+    """``Score: 18 / 24 (all tests)``, or that it was not graded."""
+    if result.not_graded:
+        return f"Not graded: no score (of {points(result.max_score)} points)"
+    return (f"Score: {points(result.score)} / {points(result.max_score)} "
+            f"({_scope(result)})")
+
+
 def text(result: Result, width: int = 100) -> str:
     """The terminal report."""
     out = header(result) + [""]
     name_w = max((len(t.test.name) for t in result.tests), default=10)
-    for t in result.tests:
+    for t in _shown(result):
         out.append(f"  {BADGE[t.status]}  {t.test.name:<{name_w}}  {_score(t):>7}")
         if t.status == "passed":
             continue
@@ -59,9 +72,7 @@ def text(result: Result, width: int = 100) -> str:
             indent = " " * (8 + len(line) - len(line.lstrip()))
             out += textwrap.wrap(line.strip(), width, initial_indent=indent,
                                  subsequent_indent=indent + "  ")
-    scope = _scope(result)
-    out += ["", f"Score: {points(result.score)} / {points(result.max_score)} ({scope}), "
-                f"checked in {result.elapsed:.1f} s"]
+    out += ["", f"{_total(result)}, checked in {result.elapsed:.1f} s"]
     if result.output.strip():
         shown = result.output.strip().splitlines()[:8]
         out += ["", "Your code printed (the grader ignores it):"] + [f"  | {s}" for s in shown]
@@ -72,7 +83,7 @@ def html(result: Result) -> str:
     """The notebook report, with a picture of the first failing rotation."""
     esc = _html.escape
     rows = []
-    for t in result.tests:
+    for t in _shown(result):
         colour = COLOURS[t.status]
         detail = "" if t.status == "passed" else "<br>".join(esc(s) for s in test_lines(t))
         rows.append(
@@ -80,7 +91,6 @@ def html(result: Result) -> str:
             f"<td>{esc(t.test.name)}</td><td style='text-align:right'>{_score(t)}</td>"
             f"<td style='text-align:left;font-size:90%'>{detail}</td></tr>")
     head = "<br>".join(esc(s) for s in header(result))
-    scope = _scope(result)
     picture = ""
     from .figures import first_failure_png
 
@@ -91,8 +101,7 @@ def html(result: Result) -> str:
     return utf8(
         f"<div><p>{head}</p><table><tr><th></th><th>test</th><th>points</th><th>why</th></tr>"
         + "".join(rows)
-        + f"</table><p><b>Score: {points(result.score)} / {points(result.max_score)}</b> "
-        f"({scope})</p>{picture}</div>"
+        + f"</table><p><b>{esc(_total(result))}</b></p>{picture}</div>"
     )
 
 
@@ -119,16 +128,22 @@ def csv_header(result: Result) -> list[str]:
     return CSV_FIXED + [t.test.name for t in scored(result)]
 
 
+NOT_GRADED = "not graded"  # a row's status when the machine or the grader failed: no score
+
+
 def csv_row(name: str, result: Result) -> dict[str, Any]:
-    """A row of ``grades.csv``; ``reason`` says why a refused submission was (one line)."""
-    status = "refused" if result.problems else "graded"
+    """A row of ``grades.csv``; ``reason`` says why a refused submission was, or why one
+    was not graded (one line): such a row's score and test columns are empty, never 0."""
+    status = NOT_GRADED if result.not_graded else "refused" if result.problems else "graded"
     found = sorted({f"{t.test.function}:{t.misconception.key}" for t in scored(result)
                     if t.misconception})
-    reason = bounded(" ".join("; ".join(result.problems).split()))
+    reason = bounded(" ".join((result.not_graded or "; ".join(result.problems)).split()))
     row: dict[str, Any] = {
-        "submission": name, "score": round(result.score, 4), "max_score": result.max_score,
-        "status": status, "reason": reason, "misconceptions": " ".join(found),
-        "seconds": round(result.elapsed, 2), "isolation": str(result.isolation),
+        "submission": name, "score": "" if result.not_graded else round(result.score, 4),
+        "max_score": result.max_score, "status": status, "reason": reason,
+        "misconceptions": " ".join(found), "seconds": round(result.elapsed, 2),
+        "isolation": str(result.isolation),
     }
-    row.update({t.test.name: round(t.score, 4) for t in scored(result)})
+    row.update({t.test.name: "" if result.not_graded else round(t.score, 4)
+                for t in scored(result)})
     return row

@@ -82,6 +82,10 @@ class Result:
     output: str = ""
     elapsed: float = 0.0
     isolation: str = ""
+    #: why the submission could not be graded, the machine's fault or the grader's (the
+    #: sandbox could not start, a worker was lost, a bug of ours): then it has no score, and
+    #: every view says "not graded" instead of a number
+    not_graded: str = ""
 
     @property
     def score(self) -> float:

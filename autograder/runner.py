@@ -19,8 +19,9 @@ import numpy as np
 
 from .judging import Prepared, diagnose, error_text, judge, prepare
 from .limits import DEFAULT_LIMITS, Limits
+from .records import not_graded
 from .results import CaseResult, Result, TestResult
-from .sandbox import Sandbox, level_for
+from .sandbox import Sandbox, Unavailable, level_for
 from .spec import Assignment, Case, Function, Misconception, Rollout, Run
 from .submission import Source, SubmissionError, import_problems, read_regular, read_source
 
@@ -33,12 +34,37 @@ def default_submission(assignment: Assignment) -> Path:
     return here if here.exists() else ASSIGNMENTS_DIR / assignment.template
 
 
+MACHINE_ATTEMPTS = 3  # gradings of one submission that the machine may fail before "not graded"
+MACHINE_PAUSE = 1.0  # seconds before the second attempt, twice that before the third
+
+
 def run(assignment: Assignment, submission: Path, seed: str | None = None,
         limits: Limits = DEFAULT_LIMITS, level: str | None = None) -> Result:
     """Grade ``submission`` (a ``.py`` or ``.ipynb``) against ``assignment``, in a sandbox
-    of isolation ``level`` (default: the strongest here; see :mod:`autograder.sandbox`)."""
+    of isolation ``level`` (default: the strongest here; see :mod:`autograder.sandbox`).
+
+    A grading the machine fails (the sandbox could not start or be prepared:
+    :class:`~autograder.sandbox.Unavailable`) is done again from the start, with a fresh
+    sandbox and budget, :data:`MACHINE_ATTEMPTS` times in all; if it never succeeds the
+    result is *not graded* (:attr:`Result.not_graded` says why) and has no score."""
     start = time.monotonic()
-    seed = seed or None
+    for attempt in range(MACHINE_ATTEMPTS):
+        if attempt:
+            time.sleep(MACHINE_PAUSE * attempt)
+        try:
+            result = _graded(assignment, submission, seed or None, limits, level)
+            break
+        except Unavailable as exc:
+            why = str(exc)
+    else:
+        result = not_graded(assignment, submission, seed or None, level_for(level),
+                            f"{why} on each of {MACHINE_ATTEMPTS} attempts")
+    result.elapsed = time.monotonic() - start
+    return result
+
+
+def _graded(assignment: Assignment, submission: Path, seed: str | None, limits: Limits,
+            level: str | None) -> Result:
     prepared = prepare(assignment, seed)
     tests = [TestResult(p.test, assignment.function(p.test.function)) for p in prepared]
     result = Result(assignment, submission, tests, hidden_run=seed is not None,
@@ -54,7 +80,6 @@ def run(assignment: Assignment, submission: Path, seed: str | None = None,
         _skip_all(result, "not run: the submission was refused (see above)")
     else:
         _run_tests(assignment, source, prepared, result, limits)
-    result.elapsed = time.monotonic() - start
     return result
 
 

@@ -7,8 +7,10 @@ guarantees of each are in ``docs/sandbox.md``):
 
 ``bubblewrap`` (Linux with ``bwrap`` and libseccomp; the grader may be root or not)
     The kernel is the boundary. ``bwrap`` runs as an unprivileged user (the grader's own, or
-    :data:`SANDBOX_UID` when the grader is root) and starts the child in new user, mount,
-    PID, network, IPC, UTS and cgroup namespaces, as uid :data:`SANDBOX_UID` there too, with
+    when the grader is root a user id leased for this submission alone, as at the ``chroot``
+    level, so that no process count or signal is shared with a classmate or a host daemon)
+    and starts the child in new user, mount, PID, network, IPC, UTS and cgroup namespaces,
+    as uid :data:`SANDBOX_UID` inside, with
     every capability dropped, ``no_new_privs`` set, nested user namespaces disabled and the
     seccomp filter of :mod:`autograder.seccomp` (no new processes, no mounts, no ptrace, no
     sockets but AF_UNIX...). Its root file system is entered with ``pivot_root`` and holds
@@ -60,7 +62,7 @@ import sys
 import tempfile
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from importlib.util import find_spec
 from pathlib import Path
@@ -81,10 +83,11 @@ from .protocol import (
     read_frame,
     write_frame,
 )
+from .submission import printable
 
 FATAL = ("timeout", "crash", "garbage")
 INSIDE = "/sandbox"  # where the runtime, the child's files and the working directory appear
-SANDBOX_UID = 65534  # the user bwrap runs as for a root grader, and the child inside it
+SANDBOX_UID = 65534  # the child's user inside bwrap's user namespace (nobody)
 
 
 class Isolation(str, enum.Enum):
@@ -141,6 +144,13 @@ ISOLATION_NOTES: dict[str, str] = {
 }
 
 
+class Unavailable(Exception):
+    """The sandbox could not run the submission at all, for a reason of the grading machine
+    (the child ended or hung before the submission's first instruction, its runtime could
+    not be staged, no user id could be leased): nothing about the submission is known, so
+    it is not graded rather than scored. The message says what the sandbox said."""
+
+
 @dataclass
 class Probe:
     """The strongest level this machine gives, and why no stronger one."""
@@ -165,13 +175,15 @@ def probe() -> Probe:
         if missing:
             why = why or missing
             continue
-        with Sandbox("", [], Limits(load_timeout=20.0), frozenset(), level=level) as box:
-            started = box.start()
-            if started.status == "ok":
-                return Probe(level, why)
-            # what the sandbox itself printed (bwrap's reason) says more than the exit status
-            why = why or f"the {level} sandbox did not start here: " + (
-                box.output(300).strip() or started.message or started.status)
+        try:
+            with Sandbox("", [], Limits(load_timeout=20.0), frozenset(), level=level) as box:
+                started = box.start()
+                if started.status == "ok":
+                    return Probe(level, why)
+                refusal = started.message or started.status
+        except Unavailable as exc:
+            refusal = str(exc)
+        why = why or f"the {level} sandbox did not start here: {refusal}"
     return Probe(Isolation.PLAIN, why)
 
 
@@ -209,6 +221,9 @@ def level_for(requested: str | None, floor: str | None = None) -> Isolation:
             raise ValueError(f"{name}: {value!r} is not one of {', '.join(LEVELS)}")
     best = Isolation(isolation())
     level = best if requested is None else Isolation(requested)
+    if level is Isolation.CHROOT and not (sys.platform == "linux" and os.geteuid() == 0):
+        raise ValueError("isolation: 'chroot' needs a grader running as root on Linux (it "
+                         "leases a user id per submission)")
     if level.rank < best.rank:
         raise ValueError(f"isolation: {requested!r} is not available on this machine (the "
                          f"strongest here is {best!r}: {probe().why_not_stronger})")
@@ -344,11 +359,17 @@ class Sandbox:
         self._starting = threading.Lock()  # a child starts, or the disk watch empties its folder
         self.work = self.root / "work"
         try:
-            if self.level is Isolation.CHROOT:
+            if self.level.staged and os.geteuid() == 0:
+                # a user id of its own (for bwrap too): no process count, signal or file is
+                # shared with a classmate's sandbox or with a host daemon running as nobody
                 self._lease = jail.Lease()
+            if self.level is Isolation.CHROOT:
                 self.work = runtime.staged().work / self.root.name
             if self.level is not Isolation.BUBBLEWRAP:
                 self._make_work()
+        except OSError as exc:  # no free user id, no runtime: the machine's
+            self.__exit__()
+            raise Unavailable(f"the sandbox could not be prepared ({exc})") from None
         except BaseException:
             self.__exit__()
             raise
@@ -357,7 +378,8 @@ class Sandbox:
         """The child's working folder, holding the submission (bubblewrap's is a tmpfs made
         inside the sandbox)."""
         work = self.work
-        if self._lease is not None:  # the leased user's alone
+        if self.level is Isolation.CHROOT:  # the leased user's alone
+            assert self._lease is not None
             work.mkdir(mode=0o700)
             os.chown(work, self._lease.uid, self._lease.uid)
         else:
@@ -424,10 +446,16 @@ class Sandbox:
         prlimit = shutil.which("prlimit") if level.staged else None
         # The limits hold from the interpreter's first instruction, not from the child's own
         # setrlimit calls: prlimit sets them on what it starts, and they pass on from there.
+        # RLIMIT_NPROC counts every task of bwrap's host user: a leased one's are this
+        # submission's alone, but the grader's own user (a grader not root) has its desktop's
+        # too, and bwrap could not start; there the child sets it itself, where it counts the
+        # tasks of its own user namespace only.
+        nproc = [] if level is Isolation.BUBBLEWRAP and self._lease is None else [
+            f"--nproc={limits.get('tasks')}"]
         cap = [prlimit, f"--as={limits['memory_mb'] << 20}",
                f"--cpu={limits['cpu_seconds']}:{limits['cpu_seconds'] + 1}",
                f"--fsize={limits['file_mb'] << 20}", "--core=0", "--nofile=64",
-               f"--nproc={limits['tasks']}", "--"] if prlimit and limits else []
+               *nproc, "--"] if prlimit and limits else []
         if level is Isolation.CHROOT:
             assert self._lease is not None
             return [*cap, *jail.launcher("run", str(self._lease.uid), str(rt.jail), work,
@@ -452,20 +480,26 @@ class Sandbox:
                 "--seccomp", str(fds[0]), "--chdir", f"{INSIDE}/work", "--", *cmd], fds
 
     def start(self) -> Outcome:
-        """Start a child and wait until the submission is loaded (status ``ok`` if it is).
+        """Start a child and wait until the submission is loaded (status ``ok`` if it is, or
+        the submission's own failure to load).
 
-        bubblewrap that could not build the box (a namespace or mount the kernel refused, as
-        it may for want of a resource under load) exits with code 1 and its reason on
-        stderr, before the submission runs: that start is tried again
-        (:data:`START_ATTEMPTS` in all), and if it never succeeds the reason is reported."""
+        A child that ends or hangs before the submission's first instruction (the child's
+        ``started`` frame: bwrap refused a namespace or a fork for want of a resource, the
+        interpreter could not start) is the machine's: that start is tried again
+        (:data:`START_ATTEMPTS` in all), and then :class:`Unavailable` says what the sandbox
+        said last."""
+        said = ""
         for _ in range(START_ATTEMPTS):
             logged = self._logged()
             started = self._start_once()
-            refused = self._refusal(logged) if started.status == "crash" else None
-            if refused is None:
+            if started.status == "crash":  # while the submission loaded: its last line says why
+                last = self._last_words(logged, drop=False)
+                return replace(started, message=started.message + (
+                    f" (the last line it wrote: {last})" if last else ""))
+            if started.status != "unstarted":
                 return started
-        return Outcome("crash", message=f"the sandbox could not start ({refused}); this is the "
-                                        "grading machine's fault, not your code's")
+            said = self._last_words(logged, drop=True) or started.message
+        raise Unavailable(f"the sandbox could not start ({said})")
 
     def _logged(self) -> int:
         """How many bytes the child's output log holds now."""
@@ -474,22 +508,20 @@ class Sandbox:
         except OSError:
             return 0
 
-    def _refusal(self, logged: int) -> str | None:
-        """bubblewrap's own reason if the child that just ended was bwrap refusing to start
-        (exit code 1, its first line after ``logged`` bytes of the log begins ``bwrap:``)."""
-        child = self._spawned
-        if self.level is not Isolation.BUBBLEWRAP or child is None or child.returncode != 1:
-            return None
+    def _last_words(self, logged: int, drop: bool) -> str:
+        """The last line written to the log after its first ``logged`` bytes: bwrap's reason,
+        the interpreter's last error, the submission's last output. ``drop``: remove them
+        from the log (the sandbox's words, not the submission's output)."""
         try:
             with open(self.stdout, "rb") as f:
-                f.seek(logged)
-                line = f.read(500).decode("utf-8", "replace").partition("\n")[0].strip()
+                f.seek(max(logged, self._logged() - 4096))
+                text = f.read(4096).decode("utf-8", "replace")
+            if drop:
+                os.truncate(self.stdout, logged)
         except OSError:
-            return None
-        if not line.startswith("bwrap:"):
-            return None
-        os.truncate(self.stdout, logged)  # bwrap's words, not the submission's output
-        return line
+            return ""
+        lines = [line.strip() for line in text.splitlines() if line.strip()]
+        return printable(lines[-1])[:300] if lines else ""
 
     def _start_once(self) -> Outcome:
         if time.monotonic() >= self.deadline:
@@ -505,7 +537,11 @@ class Sandbox:
             return Outcome("crash", message=f"the sandbox could not be prepared ({exc})")
         assert self.proc.stdout is not None
         self._replies = Replies(self.proc.stdout)
-        first = self._receive(time.monotonic() + self.limits.load_timeout, "your file")
+        deadline = time.monotonic() + self.limits.load_timeout
+        began = self._began(deadline)
+        if began:
+            return began
+        first = self._receive(deadline, "your file")
         if first.status != "ok":
             return first
         frame: dict[str, Any] = first.value if isinstance(first.value, dict) else {}
@@ -527,13 +563,34 @@ class Sandbox:
         self.missing = list(missing)
         return Outcome("ok")
 
+    def _began(self, deadline: float) -> Outcome | None:
+        """None once the child says it started (the submission runs next); otherwise an
+        ``unstarted`` outcome saying how it ended, or the budget's timeout if that ran out."""
+        assert self._replies is not None
+        try:
+            frame = self._replies.get(min(deadline, self.deadline))
+        except TimeoutError:
+            frame = "timeout"
+        except ProtocolError:
+            frame = "garbage"
+        if frame == {"op": "started"}:
+            return None
+        code = self._reap(1.0)[0] if frame is None else None
+        self.stop()
+        if time.monotonic() >= self.deadline:
+            return Outcome("timeout", message=self._budget_message())
+        how = (f"it did not start within {self.limits.load_timeout:g} s" if frame == "timeout"
+               else f"it ended with code {code}" if frame is None
+               else "its first message was not the child's")
+        return Outcome("unstarted", message=how)
+
     def spawn(self, config: dict[str, Any], program: list[str] | None = None,
               **popen: Any) -> subprocess.Popen[bytes]:
-        """Start the child's process as :meth:`_command` says, as :data:`SANDBOX_UID` when the
+        """Start the child's process as :meth:`_command` says, as the leased user when the
         grader is root (a submission never runs as root), with a pipe for its input."""
         cmd, fds = self._command(config, program)
-        if self.level is Isolation.BUBBLEWRAP and os.geteuid() == 0:
-            popen.update(user=SANDBOX_UID, group=SANDBOX_UID, extra_groups=[])
+        if self.level is Isolation.BUBBLEWRAP and self._lease is not None:
+            popen.update(user=self._lease.uid, group=self._lease.uid, extra_groups=[])
         env = _environment(config["cwd"])
         if self.level.staged:
             env["LD_LIBRARY_PATH"] = f"{INSIDE}/python/lib"
@@ -703,7 +760,7 @@ class Sandbox:
 
     def _budget_message(self) -> str:
         return (f"not run: your submission used its whole time budget ({self.limits.budget:g} s "
-                "for all tests); what was left scores 0")
+                "for all tests, besides a rollout test's own time); what was left scores 0")
 
     def _fatal(self, status: str, what: str) -> Outcome:
         code = cpu = None

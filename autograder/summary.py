@@ -45,6 +45,7 @@ def facts(name: str, result: Result) -> dict[str, Any]:
         "score": round(result.score, 4),
         "max_score": result.max_score,
         "refused": bounded(" ".join("; ".join(result.problems).split()), MAX_REASON),
+        "not_graded": bounded(" ".join(result.not_graded.split()), MAX_REASON),
         "tests": {t.test.name: t.status for t in scored(result)},
         "mistakes": list(mistakes.values()),
     }
@@ -65,12 +66,15 @@ def _example(t: TestResult, own: set[str]) -> str:
 def summary_html(assignment: Assignment, class_facts: list[dict[str, Any]]) -> str:
     """The page, from each submission's :func:`facts` (in the order of ``grades.csv``)."""
     esc = html.escape
+    maximum = class_facts[0]["max_score"] if class_facts else 0
+    tests = list(class_facts[0]["tests"]) if class_facts else []
+    # not graded (the machine's fault): listed, but in no score, rate or count
+    missed = [f for f in class_facts if f.get("not_graded")]
+    class_facts = [f for f in class_facts if not f.get("not_graded")]
     n = len(class_facts)
     refused = [f for f in class_facts if f["refused"]]
     graded = n - len(refused)
-    maximum = class_facts[0]["max_score"] if class_facts else 0
     scores = [f["score"] for f in class_facts]
-    tests = list(class_facts[0]["tests"]) if class_facts else []
     passed = {t: sum(f["tests"].get(t) == "passed" for f in class_facts) for t in tests}
     counts: Counter[str] = Counter()
     first: dict[str, dict[str, str]] = {}
@@ -82,8 +86,9 @@ def summary_html(assignment: Assignment, class_facts: list[dict[str, Any]]) -> s
     mean = sum(scores) / n if n else 0.0
     parts = [
         f"<h1>{esc(assignment.key)} · {esc(assignment.title)}: class summary</h1>",
-        f"<p>{n} submissions, {graded} graded, {len(refused)} refused; mean score "
-        f"{mean:.2f} / {maximum:g}.</p>",
+        f"<p>{n + len(missed)} submissions, {graded} graded, {len(refused)} refused"
+        + (f", {len(missed)} not graded (the machine's fault: grade again with --resume)"
+           if missed else "") + f"; mean score {mean:.2f} / {maximum:g}.</p>",
         "<h2>Scores</h2>", _img(_histogram_png(scores, maximum), "score histogram"),
         "<h2>Pass rate per test</h2>",
         f"<p>Of the {graded} graded submissions, how many pass each test in full.</p>",
@@ -110,6 +115,10 @@ def summary_html(assignment: Assignment, class_facts: list[dict[str, Any]]) -> s
                      "<th>reason</th></tr>"
                      + "".join(f"<tr><td>{esc(f['name'])}</td><td>{esc(f['refused'])}</td></tr>"
                                for f in refused) + "</table>")
+    if missed:
+        parts.append("<h2>Not graded</h2><table><tr><th>submission</th><th>why</th></tr>"
+                     + "".join(f"<tr><td>{esc(f['name'])}</td><td>{esc(f['not_graded'])}</td>"
+                               "</tr>" for f in missed) + "</table>")
     style = ("body{font-family:sans-serif;max-width:60em;margin:1em auto}"
              "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 6px;"
              "text-align:left;vertical-align:top}")

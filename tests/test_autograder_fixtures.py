@@ -138,6 +138,12 @@ ADVERSARIAL = {
     "adv_tcl_exec.py": (10, ["quat_mul raised RuntimeError: reached ['tkinter: ImportError', "
                              "'_tkinter: ImportError']"]),
     "adv_huge_answer.py": (10, ["far more numbers than the 80 that could make sense here"]),
+    # threads up to its own limit: no harm to anyone, full marks for correct answers
+    "adv_threads.py": (12, []),
+    # bwrap's refusal forged after the child started: the submission's own failure, scored
+    "adv_fake_refusal.py": (0, ["Refused: your file could not be loaded: the interpreter "
+                                "exited (code 1) while your file ran", "(the last line it "
+                                "wrote: bwrap: Creating new namespace failed"]),
 }
 # The portable level (Windows) has no memory limit: the bomb's 32 GiB would really be filled.
 PORTABLE_HOSTILE = sorted(set(ADVERSARIAL) - {"adv_memory_bomb.py"})
@@ -155,6 +161,7 @@ def test_hostile_submission_earns_nothing_it_did_not_compute(name, level, tmp_pa
     score, phrases = ADVERSARIAL[name]
     visible = sum(t.score for t in result.tests if not t.test.hidden)
     assert visible == score
+    assert not result.not_graded  # a machine fault is no way out of a score
     text = " ".join(str(result).split())  # as one line: the report wraps at 100 columns
     for phrase in phrases:
         assert phrase in text

@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 from autograder.cli import main
-from autograder.gradescope.feedback import CONTACT, code_block, markdown_text
+from autograder.gradescope.feedback import code_block, markdown_text
 from autograder.gradescope.schema import problems
 
 REPO = Path(__file__).resolve().parents[1]
@@ -100,6 +100,19 @@ def grade(root: Path, python: Path, files: dict[str, str | bytes], metadata: dic
           **env: str) -> tuple[dict, str]:
     """Put ``files`` in ``root/submission`` and run ``run_autograder`` as Gradescope does; the
     results (checked against the schema) and the log."""
+    out = run_autograder(root, python, files, metadata, **env)
+    assert out.returncode == 0, out.stdout + out.stderr
+    text = (root / "results" / "results.json").read_text()
+    results = json.loads(text)
+    assert problems(results) == [], text
+    assert SEED not in text and SEED not in out.stdout + out.stderr
+    _check_conventions(results)
+    return results, out.stdout
+
+
+def run_autograder(root: Path, python: Path, files: dict[str, str | bytes],
+                   metadata: dict | None = None, **env: str) -> subprocess.CompletedProcess:
+    """``run_autograder`` run as Gradescope runs it on ``files``."""
     submission = root / "submission"
     shutil.rmtree(submission, ignore_errors=True)
     submission.mkdir()
@@ -111,15 +124,8 @@ def grade(root: Path, python: Path, files: dict[str, str | bytes], metadata: dic
     meta.unlink(missing_ok=True)
     if metadata is not None:
         meta.write_text(json.dumps(metadata))
-    out = subprocess.run([str(root / "run_autograder")], cwd=root, capture_output=True,
-                         text=True, env=_env(root, python, **env), timeout=300)
-    assert out.returncode == 0, out.stdout + out.stderr
-    text = (root / "results" / "results.json").read_text()
-    results = json.loads(text)
-    assert problems(results) == [], text
-    assert SEED not in text and SEED not in out.stdout + out.stderr
-    _check_conventions(results)
-    return results, out.stdout
+    return subprocess.run([str(root / "run_autograder")], cwd=root, capture_output=True,
+                          text=True, env=_env(root, python, **env), timeout=300)
 
 
 def _check_conventions(results: dict) -> None:
@@ -325,22 +331,33 @@ def test_broken_submissions_get_a_results_file_that_says_what_broke(roots, numpy
     assert results["score"] == 0 and "UTF-8" in results["output"]
 
 
-def test_grader_faults_say_contact_your_instructor(roots, numpy_python, tmp_path):
+def test_grader_and_machine_faults_are_not_graded(roots, numpy_python, tmp_path):
+    """No results.json and a failing exit: Gradescope shows that the autograder failed, with
+    no score in its gradebook, and Regrade grades it again; the log says why."""
     root = roots("a1")
-    # the grader's Python is missing: the shell script writes the results itself
-    results, log = grade(root, tmp_path / "no-python", {"a1_rotations.py": "x = 1\n"})
-    assert results["output"] == CONTACT and results["score"] == 0
-    assert "wrote no results.json" in log
-    # the grader raises: the student is told to ask, the instructor reads the traceback
+    results = root / "results" / "results.json"
+    files = {"a1_rotations.py": fixture("a1", "reference", root)}
+    # the grader's Python is missing
+    out = run_autograder(root, tmp_path / "no-python", files)
+    assert out.returncode != 0 and not results.exists()
+    assert "wrote no results.json: not graded" in out.stdout
+    # the grader raises: the instructor reads the traceback
     env_file = root / "source" / "bundle.env"
     saved = env_file.read_text()
     env_file.write_text(saved.replace("ASSIGNMENT=a1", "ASSIGNMENT=zz"))
     try:
-        results, log = grade(root, numpy_python, {"a1_rotations.py": "x = 1\n"})
+        out = run_autograder(root, numpy_python, files)
     finally:
         env_file.write_text(saved)
-    assert results["output"] == CONTACT and results["score"] == 0
-    assert "Traceback" in log and "unknown 'zz'" in log
+    assert out.returncode != 0 and not results.exists()
+    assert "grader fault: not graded, no results.json written" in out.stdout
+    assert "Traceback" in out.stdout and "unknown 'zz'" in out.stdout
+    if os.geteuid() == 0:  # no user id to lease (nobody's is taken): no sandbox starts
+        out = run_autograder(root, numpy_python, files, AUTOGRADER_UIDS="65534-65534")
+        assert out.returncode != 0 and not results.exists()
+        assert "grader fault: not graded, no results.json written" in out.stdout
+        assert ("the sandbox could not be prepared (every user id of range(65534, 65535) is "
+                "leased or in use") in out.stdout
 
 
 def test_the_schema_check_knows_every_documented_key():

@@ -508,6 +508,7 @@ def test_a_start_bubblewrap_refused_is_tried_again_and_then_named(refusals, monk
     """bubblewrap that cannot build the box exits with code 1 and says why on stderr before
     the submission runs: the start is tried again, and if it never succeeds the report
     names bubblewrap's reason instead of blaming the student's code."""
+    import autograder.runner
     import autograder.sandbox
 
     starts = []
@@ -521,12 +522,17 @@ def test_a_start_bubblewrap_refused_is_tried_again_and_then_named(refusals, monk
         return ["/bin/sh", "-c", f'echo "{REFUSAL}" >&2; exit 1', "sh", *cmd], fds
 
     monkeypatch.setattr(autograder.sandbox.Sandbox, "_command", refusing)
+    monkeypatch.setattr(autograder.runner, "MACHINE_PAUSE", 0.0)
     result = check("a1", REPO / "tests/fixtures/a1/reference.py", limits=LIMITS)
     if refusals < autograder.sandbox.START_ATTEMPTS:
         assert result.score == result.max_score, str(result)
         assert not result.output  # bwrap's words are not shown as the student's
         return
-    assert result.score == 0
+    # every start of every attempt refused: not graded, with bwrap's own words, and no score
+    assert len(starts) == autograder.sandbox.START_ATTEMPTS * autograder.runner.MACHINE_ATTEMPTS
+    assert result.not_graded and not result.problems
     text = one_line(result)
-    assert f"the sandbox could not start ({REFUSAL}); this is the grading machine's" in text
-    assert "exited (code" not in text
+    assert (f"Not graded: the sandbox could not start ({REFUSAL}) on each of 3 attempts. This "
+            "is the grading machine's fault, not your code's") in text
+    assert "Not graded: no score (of 12 points)" in text
+    assert "exited (code" not in text and "Score:" not in text and "0/1" not in text

@@ -14,8 +14,6 @@ from ..findings import MAX_FIELD, bounded, header, points, scored, test_lines
 from ..results import Result, TestResult
 from ..spec import Misconception
 
-CONTACT = ("The grader itself failed on this submission: this is not a problem with your "
-           "code. Please contact your instructor (and resubmit later).")
 # Parentheses stay: they act only after a "]" (escaped here), and "\(" is an inline-math
 # delimiter where MathJax renders the page.
 MARKDOWN_SPECIALS = re.compile(r"([\\`*_{}\[\]<>#+!|~-])")
@@ -56,6 +54,8 @@ def summary(result: Result, graded: str) -> str:
     said = [line for line in header(result)[1:] if line]
     if said:
         parts.append(code_block(said))
+    if result.not_graded:
+        return bounded("\n\n".join(parts), MAX_FIELD)
     shown = [t for t in scored(result) if not t.test.hidden]
     found: dict[tuple[str, str], tuple[Misconception, list[str]]] = {}
     for t in shown:
@@ -97,6 +97,13 @@ def results_json(result: Result, graded: str, extra: dict[str, Any] | None = Non
         "extra_data": {"execution_time": round(t.elapsed, 3), "function": t.test.function,
                        "misconception": t.misconception.key if t.misconception else None},
     } for t in scored(result)]
+    if result.not_graded:  # no score at all: Gradescope's runner writes no results.json
+        return {"execution_time": round(result.elapsed, 3), "output": summary(result, graded),
+                "output_format": "md", "visibility": "visible", "stdout_visibility": "hidden",
+                "extra_data": {"assignment": result.assignment.key,
+                               "isolation": str(result.isolation),
+                               "not_graded": bounded(result.not_graded), **(extra or {})},
+                "tests": []}
     return {
         "score": round(result.score, 4),
         "execution_time": round(result.elapsed, 3),
@@ -108,10 +115,3 @@ def results_json(result: Result, graded: str, extra: dict[str, Any] | None = Non
                        **(extra or {})},
         "tests": tests,
     }
-
-
-def failure_json(elapsed: float) -> dict[str, Any]:
-    """What a submission gets when the grader, not the submission, failed."""
-    return {"score": 0, "execution_time": round(elapsed, 3), "output": CONTACT,
-            "output_format": "md", "visibility": "visible", "stdout_visibility": "hidden",
-            "tests": []}

@@ -10,10 +10,12 @@ results mark as shown to instructors only.
 The sandbox runs at the strongest level the container allows (``$AUTOGRADER_ISOLATION`` may
 ask for a weaker one, as the tests do), and never below ``$AUTOGRADER_MIN_ISOLATION``
 (default :data:`~autograder.sandbox.FLOOR`, which a stock container run as root reaches): a
-container that cannot give it grades nothing, and its log says why. Whatever happens, a
-results.json is written: a submission that cannot be graded gets one that says why (like any
-refused submission), and a fault of the grader gets one that tells the student to contact the
-instructor, with the traceback in the log.
+container that cannot give it grades nothing, and its log says why. A submission the
+student's files decide (graded, or refused because nothing can be graded) gets a results.json
+that says why. One the machine or the grader failed on (the sandbox could not start after
+every retry, a bug of ours) is *not graded*: no results.json is written and the exit status is
+:data:`NOT_GRADED_EXIT`, so Gradescope shows that the autograder failed instead of a score,
+and the instructor's "Regrade" grades it again; the log says why, with the traceback.
 """
 
 from __future__ import annotations
@@ -22,7 +24,6 @@ import json
 import os
 import re
 import sys
-import time
 import traceback
 from importlib.metadata import version
 from pathlib import Path
@@ -37,7 +38,7 @@ from ..runner import run
 from ..sandbox import FLOOR, Isolation, level_for, weaker_warning
 from ..spec import Assignment
 from ..submission import SubmissionError, printable, read_regular
-from .feedback import failure_json, results_json
+from .feedback import results_json
 from .schema import problems
 
 SOURCE = Path(__file__).resolve().parents[2]  # the bundle's root: $AUTOGRADER_ROOT/source
@@ -46,15 +47,22 @@ SEED = "seed"
 MAX_METADATA = 1 << 20  # bytes of submission_metadata.json read
 
 
+NOT_GRADED_EXIT = 3  # the exit status for a submission not graded (no results.json)
+NOT_GRADED = ("not graded, no results.json written: Gradescope shows that the autograder "
+              "failed (no score), and Regrade grades it again")
+
+
 def main() -> int:
-    start = time.monotonic()
     root = Path(os.environ.get("AUTOGRADER_ROOT") or "/autograder")
     try:
         results = grade(root)
-    except Exception:  # our fault, not the student's: they are told to ask, we log it
-        print("grader fault (the student was told to contact the instructor):", flush=True)
+    except Exception:  # our fault, not the student's: no score, the traceback logged
+        print(f"grader fault: {NOT_GRADED}:", flush=True)
         traceback.print_exc(file=sys.stdout)
-        results = failure_json(time.monotonic() - start)
+        return NOT_GRADED_EXIT
+    if "score" not in results:  # the machine's fault (results_json says why)
+        print(f"{NOT_GRADED}: {results['extra_data']['not_graded']}", flush=True)
+        return NOT_GRADED_EXIT
     (root / "results").mkdir(parents=True, exist_ok=True)
     with create(root / "results" / "results.json") as f:
         f.write(json.dumps(results, indent=1, allow_nan=False))
