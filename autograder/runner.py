@@ -139,42 +139,65 @@ def _numbers(x: Any) -> int:
 def roll_test(fn: Function, prepared: Prepared, sandbox: Sandbox, locate: Callable[[int], str],
               catalogue: tuple[Misconception, ...]) -> tuple[list[CaseResult], list[CaseResult]]:
     """Every run of a rollout test (:func:`roll`), with the steps to diagnose from. As in a
-    test of single calls, a frame that is not the child's own voids the whole test; the runs
-    together get ``rollout.seconds``, and those still running when it is spent end there."""
+    test of single calls, a frame that is not the child's own voids the whole test.
+
+    The runs together get ``rollout.seconds`` of their own, and those still running when
+    they are spent end there (the report names the test and says why: :class:`Pace`).
+    Those seconds are outside the submission's budget (``Limits.budget``): while the test
+    runs the sandbox's deadline is the test's own end, whatever the tests before it left,
+    and the submission then has what it had left when the test began. No test can spend a
+    rollout test's time, nor a rollout test the others': a submission's wall time is bounded
+    by ``Limits.budget`` plus its rollout tests' ``seconds``."""
     rollout = prepared.test.rollout
     assert rollout is not None
-    pace = Pace(time.monotonic(), rollout.seconds)
-    results: list[CaseResult] = []
-    wrong: list[CaseResult] = []
-    for case, expected in zip(prepared.cases, prepared.expected, strict=True):
-        result, first_wrong = roll(fn, rollout, case, expected, sandbox, locate, catalogue,
-                                   pace, len(prepared.cases))
-        if result.kind == "garbage":  # none of the test can be trusted
-            return [CaseResult(c, "garbage", result.reason, None, e.answers[-1])
-                    for c, e in zip(prepared.cases, prepared.expected, strict=True)], []
-        results.append(result)
-        wrong += [first_wrong] if first_wrong else []
-    return results, wrong
+    pace = Pace(prepared.test.name, time.monotonic(), rollout.seconds, rollout.hint)
+    left = sandbox.deadline - pace.started  # the submission's budget, kept for after
+    sandbox.deadline = pace.started + rollout.seconds  # a call in flight then is cut short
+    try:
+        results: list[CaseResult] = []
+        wrong: list[CaseResult] = []
+        for case, expected in zip(prepared.cases, prepared.expected, strict=True):
+            result, first_wrong = roll(fn, rollout, case, expected, sandbox, locate, catalogue,
+                                       pace, len(prepared.cases))
+            if result.kind == "garbage":  # none of the test can be trusted
+                return [CaseResult(c, "garbage", result.reason, None, e.answers[-1])
+                        for c, e in zip(prepared.cases, prepared.expected, strict=True)], []
+            results.append(result)
+            wrong += [first_wrong] if first_wrong else []
+        return results, wrong
+    finally:
+        sandbox.deadline = time.monotonic() + max(left, 0.0)
+
+
+PACE_HINT = ("look for work your function repeats needlessly in every call (a print, a sleep, "
+             "a loop far longer than its arrays)")
 
 
 @dataclass
 class Pace:
-    """The wall-clock time the runs of one test have had, and the calls they made in it."""
+    """The wall-clock time of one rollout test (named ``test``): when its runs started, the
+    ``seconds`` they have, the calls they made, and ``hint``, what its report adds when the
+    time is spent (:data:`PACE_HINT` if empty)."""
 
+    test: str
     started: float
     seconds: float
+    hint: str = ""
     calls: int = 0
 
     def spent(self, rollout: Rollout, runs: int) -> str | None:
-        """Why no further step may run (the test's time is spent), or None."""
+        """Why no further step may run (the test's time is spent), or None: the test, its
+        calls so far, the time a step took and the time that would have run them all."""
         used = time.monotonic() - self.started
         if used < self.seconds:
             return None
         each = 1e3 * used / max(self.calls, 1)
-        fits = 1e3 * self.seconds / (rollout.steps * runs)
-        return (f"not run: the runs of this test used their {self.seconds:g} s after "
-                f"{self.calls} calls; a step takes {each:.1f} ms here, and {fits:.1f} ms "
-                "would run them all (slow Python loops? use numpy on whole arrays)")
+        total = rollout.steps * runs
+        fits = 1e3 * self.seconds / total
+        return (f"not run: the test \"{self.test}\" ran out of its own {self.seconds:g} s "
+                f"after {self.calls} of its {total} calls: a step took {each:.1f} ms here "
+                f"(your function and the grader's round trip), and {fits:.1f} ms would run them"
+                f" all; {self.hint or PACE_HINT}")
 
 
 def roll(fn: Function, rollout: Rollout, case: Case, expected: Run, sandbox: Sandbox,
@@ -186,7 +209,8 @@ def roll(fn: Function, rollout: Rollout, case: Case, expected: Run, sandbox: San
     fails, its first step whose answer is unlike the reference's on the same arguments (as
     a case of its own, for the diagnosis). A call that raises, stops or answers in the wrong
     shape ends the run there (a raised error is then the step the diagnosis reads), and so
-    does the end of the test's time (``pace``, shared by its ``runs`` runs)."""
+    does the end of the test's time (``pace``, shared by its ``runs`` runs), before a step
+    or during one (the sandbox's deadline is then the test's: :func:`roll_test`)."""
     steps: list[Case] = []
     run = Run([], [rollout.start(case.args)])
     size = 4 * _numbers(expected.answers[0]) + 64
@@ -200,6 +224,10 @@ def roll(fn: Function, rollout: Rollout, case: Case, expected: Run, sandbox: San
         steps.append(Case(f"{case.label}, step {k + 1} of {rollout.steps}",
                           rollout.call(run.states[-1])))
         [out] = sandbox.call(fn.name, [steps[-1].args], [size])
+        late = pace.spent(rollout, runs) if out.status in ("timeout", "skipped") else None
+        if late is not None:  # cut short by the end of the test's time (the sandbox's deadline)
+            return CaseResult(case, "skipped", f"step {k + 1} of {rollout.steps}: {late}",
+                              None, last), None
         if out.status == "ok":
             assert out.value is not None
             valid = fn.check.validate(fn.name, out.value, want)

@@ -109,9 +109,14 @@ class Rollout:
     is the next state. After ``steps`` calls ``verdict(yours, reference, args)`` compares
     the :class:`Run` with the reference function's by what they do (a rotation stays a
     rotation, a joint settles, a pushed body stands): None if it achieves what it should,
-    else one sentence on what it did. All runs of one test together may take ``seconds``
-    of wall-clock time (thousands of calls: a slow step must not spend the budget of the
-    tests after it)."""
+    else one sentence on what it did.
+
+    All runs of one test together have ``seconds`` of wall-clock time of their own
+    (thousands of calls), outside the submission's ``Limits.budget``: no other test can
+    spend them, and they spend nothing of the others' (a submission's wall time is at most
+    its budget plus its rollout tests' seconds). The runs still going when they are spent
+    end there, and the report names the test, the time a step took and the time that would
+    have run them all, then ``hint``: what a step fast enough is, and what to look for."""
 
     steps: int
     advance: Callable[[Any, Any], Any]
@@ -119,6 +124,7 @@ class Rollout:
     start: Callable[[tuple[Any, ...]], Any] = _same
     call: Callable[[Any], tuple[Any, ...]] = _same
     seconds: float = 20.0
+    hint: str = ""
 
     def run(self, step: Callable[..., Any], args: tuple[Any, ...]) -> Run:
         """The whole rollout from ``args`` with ``step`` (the reference) answering."""

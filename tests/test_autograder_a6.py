@@ -4,11 +4,20 @@ centre of mass), the cases that separate the mistakes, and hostile submissions."
 
 from __future__ import annotations
 
+import dataclasses
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
-from grading_fixtures import FIXTURES, LIMITS, fixture_submission, seed, visible_cases
+from grading_fixtures import (
+    FIXTURES,
+    LIMITS,
+    fixture_submission,
+    one_line,
+    seed,
+    visible_cases,
+)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -336,24 +345,60 @@ def rigid_body_step(*args):
     assert result.score == result.max_score - run.test.points
 
 
-def test_a_slow_step_ends_its_runs_when_their_time_is_spent(tmp_path, monkeypatch):
-    """Thousands of calls: a slow step may not spend the budget of the tests after it. The
-    runs of a test share ``Rollout.seconds`` (here 1 s, at 20 ms a step); the report says
-    how long a step takes and how long would do."""
-    import dataclasses
-
+def _rollout_seconds(monkeypatch, seconds: dict[str, float], default: float | None = None):
+    """a6 loaded with the rollout tests of each function of ``seconds`` given that many
+    seconds (the others ``default``, or their own): small budgets, fast tests."""
     import autograder.assignments
 
     real_load = autograder.assignments.load
 
     def load(key):
         assignment = real_load(key)
-        tests = tuple(dataclasses.replace(t, rollout=dataclasses.replace(t.rollout, seconds=1.0))
-                      if t.rollout and t.function == "rigid_body_step" else t
-                      for t in assignment.tests)
+        tests = tuple(
+            dataclasses.replace(t, rollout=dataclasses.replace(
+                t.rollout, seconds=seconds.get(t.function, default or t.rollout.seconds)))
+            if t.rollout else t for t in assignment.tests)
         return dataclasses.replace(assignment, tests=tests)
 
     monkeypatch.setattr(autograder.assignments, "load", load)
+
+
+RAN_OUT = re.compile(r'not run: the test "rigid_body_step: bodies simulated for 1\.5 s" ran out '
+                     r"of its own 4 s after (\d+) of its 900 calls: a step took ([\d.]+) ms "
+                     r"here \(.*\), and 4\.4 ms would run them all; a correct step takes ")
+
+
+def test_a_slow_rollout_test_spends_only_its_own_time(tmp_path, monkeypatch):
+    """Thousands of calls: a correct step at 20 ms a call (``slow_step.py``) in the first
+    rollout test spends that test's own seconds (here 4 s, where its 900 calls need 18 s)
+    and nothing of the others'. Its runs end there, and its report names it and says why
+    (the calls made, the time a step took and the time that would do); the submission's
+    budget (4 s too) has not run out for the tests after it (the other rollout tests have 60
+    s of their own here), so every one of them runs and passes."""
+    _rollout_seconds(monkeypatch, {"rigid_body_step": 4.0}, default=60.0)
+    limits = dataclasses.replace(LIMITS, budget=4.0)
+    result = check("a6", fixture_submission("a6", "slow_step.py", tmp_path), limits=limits)
+    run = _runs_test(result)
+    assert [c.kind for c in run.cases] == ["skipped"] * 3, [c.reason for c in run.cases]
+    first, *later = [c.reason for c in run.cases]
+    found = RAN_OUT.search(first)
+    assert found and first.startswith("step ") and not first.startswith("step 1 "), first
+    assert float(found[2]) >= 20 and 0 < int(found[1]) < 300, first  # in the first run
+    assert all(r.startswith("step 1 of 300: ") and RAN_OUT.search(r) for r in later), later
+    assert RAN_OUT.search(one_line(result)), one_line(result)  # the report says it
+    assert run.elapsed < 4 + 3  # its own 4 s, not 900 steps x 20 ms
+    others = [t for t in result.tests if t is not run]
+    assert all(t.status == "passed" for t in others), [
+        (t.test.name, t.first_failure and t.first_failure.reason) for t in others
+        if t.status != "passed"]
+    assert "whole time budget" not in one_line(result)
+    assert result.score == result.max_score - run.test.points
+
+
+def test_the_tests_before_a_rollout_test_cannot_spend_its_time(tmp_path):
+    """Single calls that use up the whole budget (here 1.5 s, at 0.3 s a call) leave each
+    rollout test its own seconds: they run and pass, while the single-call tests after the
+    budget ran out score 0 and say so."""
     src = tmp_path / "a6_physics.py"
     src.write_text((FIXTURES / "a6" / "reference.py").read_text() + '''
 import time as _time
@@ -362,14 +407,17 @@ _right = rigid_body_step
 
 
 def rigid_body_step(*args):
-    _time.sleep(0.02)
+    if args[-1] != 0.005:  # most of the single calls; no step of a run (h = 0.005 there)
+        _time.sleep(0.3)
     return _right(*args)
 ''')
-    result = check("a6", src, limits=LIMITS)
-    run = _runs_test(result)
-    assert [c.kind for c in run.cases] == ["skipped"] * 3, [c.reason for c in run.cases]
-    first = run.cases[0].reason
-    assert first.startswith("step ") and "the runs of this test used their 1 s after " in first
-    assert " ms here, and 1.1 ms would run them all" in first, first
-    assert run.elapsed < 3  # not 300 steps x 3 runs x 20 ms
-    assert result.score == result.max_score - run.test.points
+    result = check("a6", src, limits=dataclasses.replace(LIMITS, budget=1.5))
+    rollouts = [t for t in result.tests if t.test.rollout is not None]
+    assert len(rollouts) == 3 and all(t.status == "passed" for t in rollouts), [
+        (t.test.name, t.first_failure and t.first_failure.reason) for t in rollouts]
+    single = [t for t in result.tests if t.test.rollout is None]
+    assert all(c.kind == "skipped" and "whole time budget" in c.reason
+               for t in single[2:] for c in t.cases), [(t.test.name, t.cases[0].reason)
+                                                       for t in single[2:]]
+    assert result.score == sum(t.test.points for t in rollouts) + sum(
+        t.score for t in single[:2])

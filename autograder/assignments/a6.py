@@ -148,6 +148,12 @@ def _explicit(got: Any, *args: Any) -> bool:
 # --- the rigid-body step, run for seconds ------------------------------------------------------
 
 STEP_RUN = 300  # steps of each simulated body (1.5 s at h = 0.005: a T-handle flips thrice)
+#: what a rollout test that ran out of its time says after its figures (measured with
+#: benchmarks/rollout_pace.py: a correct step costs 0.6-1.4 ms through the sandbox on an idle
+#: 2-core machine, 2-3.6 ms at load 8, loops or numpy, where 22-37 ms would fit the 20 s)
+ROLLOUT_HINT = ("a correct step takes 1-4 ms here, with plain Python loops or numpy alike: "
+                "look for work your function repeats needlessly in every call (a print, a "
+                "sleep, a loop far longer than its bodies or joints)")
 
 
 def _carry_body(args: StepArgs, answer: Any) -> StepArgs:
@@ -430,7 +436,7 @@ def pd_runs(rng: np.random.Generator) -> list[Case]:
     ]
 
 
-PD_RUN = Rollout(DRIVE_RUN, _carry_joints, drive_run_verdict)
+PD_RUN = Rollout(DRIVE_RUN, _carry_joints, drive_run_verdict, hint=ROLLOUT_HINT)
 
 
 # --- the balance torque ------------------------------------------------------------------------
@@ -645,7 +651,8 @@ def stand_verdict(yours: Run, reference: Run, start: tuple[Any, ...]) -> str | N
     return None
 
 
-STAND = Rollout(STAND_RUN, _carry_stand, stand_verdict, _stand_start, _stand_call)
+STAND = Rollout(STAND_RUN, _carry_stand, stand_verdict, _stand_start, _stand_call,
+                hint=ROLLOUT_HINT)
 
 
 def stand_runs(rng: np.random.Generator) -> list[Case]:
@@ -814,7 +821,7 @@ ASSIGNMENT = Assignment(
     tests=(
         *random_edge_hidden("rigid_body_step", step_random, step_edges, step_hidden),
         Test("rigid_body_step: bodies simulated for 1.5 s", "rigid_body_step", 1.0,
-             step_runs, rollout=Rollout(STEP_RUN, _carry_body, run_verdict)),
+             step_runs, rollout=Rollout(STEP_RUN, _carry_body, run_verdict, hint=ROLLOUT_HINT)),
         *random_edge_hidden("pd_torque", pd_random, pd_edges, pd_hidden),
         Test("pd_torque: a joint driven to its target", "pd_torque", 1.0, pd_drive),
         Test("pd_torque: joints driven from far for 0.9 s", "pd_torque", 1.0, pd_runs,
