@@ -13,10 +13,11 @@ tolerance scaled to the skeleton. The answer holds no root position: joint 0 goe
 keeps the fixed joint in place. ``retarget_rest`` is graded by the global bone directions its
 rotations give the target skeleton (the twist of a one-bone correction is free). Mistakes
 with no single wrong output are recognised by their symptoms: the answer is right once read
-as world-frame turns; the fixed joint turned or slid as with joint 0 held; the answer is the
-template's CCD with each arc measured at the next joint (the pivot family's wrong joint; the
-origin and effector pivots cannot show in rotations, whose bones forward kinematics keeps);
-for ``retarget_rest``, the bone directions of a mistaken formula.
+as world-frame turns, or as world orientations (all of it, or the path's joints); the fixed
+joint turned or slid as with joint 0 held; the answer is the template's CCD with each arc
+measured at the next joint (the pivot family's wrong joint; the origin and effector pivots
+cannot show in rotations, whose bones forward kinematics keeps); for ``retarget_rest``, the
+bone directions of a mistaken formula.
 Reference: :func:`course.fk.tree_path`, :func:`course.ik.solve`,
 :func:`course.retarget.retarget_rest`.
 """
@@ -628,13 +629,25 @@ def _world_turns_as_local(got: Any, case: IKCase) -> bool:
     return not ik_problems(fixed_up, case)
 
 
-def _world_returned(got: Any, case: IKCase) -> bool:
+def _world_returned(got: Any, case: IKCase, joints: list[int] | None = None) -> bool:
     """Right once read as world orientations: R_i = Q_{p(i)}^{-1} Q_i of the answer is a
-    right answer (and the answer itself is not)."""
+    right answer (and the answer itself is not); with ``joints``, only those rows read as
+    world orientations, the others as the local rotations they are."""
     got = rot.quat_normalize(np.asarray(got, float))
     if not ik_problems(got, case):
         return False
-    return not ik_problems(np.array(local_from_global(case.parents, got)), case)
+    world = got.copy()
+    if joints is not None:  # the other rows are local: Q_j = Q_{p(j)} R_j, parents first
+        for j in sorted(set(range(1, len(got))) - set(joints)):
+            world[j] = rot.quat_mul(world[case.parents[j]], got[j])
+    return not ik_problems(np.array(local_from_global(case.parents, world)), case)
+
+
+def _world_written_as_local(got: Any, case: IKCase) -> bool:
+    """A joint's new world orientation written as its local rotation: right once the path's
+    rows are read as world orientations (written back at the end), or the rotations after
+    some sweep of CCD that sets R_a ← D Q_a inside the loop."""
+    return _world_returned(got, case, case.path) or _local_turns_in_loop(got, case, True)
 
 
 class _WorldTurns:
@@ -668,19 +681,20 @@ class _WorldTurns:
 
 class _LocalTurns:
     """The lab report's bug inside the loop: the world turn multiplied onto the pivot's local
-    rotation, ``R_a ← D R_a``, then forward kinematics from joint 0 (held at the root
-    position); every joint of the path but the end effector is a pivot."""
+    rotation, ``R_a ← D R_a``, or with ``onto_world`` onto its world orientation and written
+    as the local rotation, ``R_a ← D Q_a``; then forward kinematics from joint 0 (held at
+    the root position). Every joint of the path but the end effector is a pivot."""
 
-    def __init__(self, case: IKCase) -> None:
-        self.case, self.path = case, case.path
+    def __init__(self, case: IKCase, onto_world: bool = False) -> None:
+        self.case, self.path, self.onto_world = case, case.path, onto_world
         self.R = np.array(case.local_quats, dtype=float)
-        self.P, _ = case.fk(self.R)
+        self.P, self.Q = case.fk(self.R)
         self.pivots = list(range(len(self.path) - 1))
 
     def turn(self, k: int, D: np.ndarray) -> None:
         a = self.path[k]
-        self.R[a] = rot.quat_mul(D, self.R[a])
-        self.P, _ = self.case.fk(self.R)
+        self.R[a] = rot.quat_mul(D, (self.Q if self.onto_world else self.R)[a])
+        self.P, self.Q = self.case.fk(self.R)
 
     def rotations(self) -> np.ndarray:
         R: np.ndarray = self.R.copy()
@@ -738,13 +752,14 @@ def _same_rotations(got: np.ndarray, model: np.ndarray) -> bool:
                        <= 1e-2))
 
 
-def _local_turns_in_loop(got: Any, case: IKCase) -> bool:
+def _local_turns_in_loop(got: Any, case: IKCase, onto_world: bool = False) -> bool:
     """Wrong, and the rotations after some sweep of CCD with each world turn multiplied on
-    the local rotation inside the loop."""
+    the local rotation inside the loop (``onto_world``: on the world orientation, written
+    as the local rotation)."""
     g = np.asarray(got, dtype=float)
     if not ik_problems(g, case):
         return False
-    return any(_same_rotations(g, w) for w in ccd_sweeps(case, _LocalTurns(case)))
+    return any(_same_rotations(g, w) for w in ccd_sweeps(case, _LocalTurns(case, onto_world)))
 
 
 def _wrong_joint(got: Any, case: IKCase) -> bool:
@@ -808,6 +823,15 @@ MISCONCEPTIONS = (
         "each relative to its parent: R_0 = Q_0, R_i = Q_{p(i)}^{-1} Q_i. Yours are right once "
         "read back that way.",
         symptom=_of_case(_world_returned)),
+    Misconception(
+        "world_written_as_local", "ik_local",
+        "a joint's world orientation written as its local rotation",
+        "Your R_i on the path are the joints' new WORLD orientations Q'_i = D Q_i (written "
+        "into R_i inside the loop, or copied at the end): forward kinematics then puts the "
+        "parent's orientation on top of them once more, Q'_{p(i)} Q'_i. A local rotation is "
+        "relative to the parent, R_i = Q'_{p(i)}^{-1} Q'_i (R_0 = Q'_0): multiply by the "
+        "parent's inverse world orientation before writing it into R_i.",
+        symptom=_of_case(_world_written_as_local)),
     *pivot_mistakes("ik_local", {"wrong_joint": _of_case(_wrong_joint)}),
     Misconception(
         "path_to_wrong", "ik_local", "the wrong path from your path_to, walked by ik_local",
