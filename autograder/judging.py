@@ -100,7 +100,8 @@ def judge(fn: Function, case: Case, expected: Any, out: Outcome, memory_mb: int 
 def diagnose(assignment: Assignment, fn: Function,
              cases: list[CaseResult]) -> Misconception | None:
     """The first catalogued mistake that reproduces (or shows the symptom of) every failing
-    case of a test, if any.
+    case of a test, if any; the cases where it has no definite answer
+    (:attr:`Misconception.undefined`) aside, as long as one is left.
 
     Only outputs of the right shape can be compared, and errors only by a mistake that
     explains them; a test with a timeout or a wrong shape among its failures gets no
@@ -110,9 +111,21 @@ def diagnose(assignment: Assignment, fn: Function,
     if not failing or any(c.got is None and c.error is None for c in failing):
         return None
     for m in assignment.misconceptions_of(fn.name):
-        if all(_reproduces(m, fn, c) for c in failing):
+        evidence = [c for c in failing if not _undefined(m, c.case)]
+        if evidence and all(_reproduces(m, fn, c) for c in evidence):
             return m
     return None
+
+
+def _undefined(m: Misconception, case: Case) -> bool:
+    """Whether ``m`` has no definite answer on ``case`` (:attr:`Misconception.undefined`)."""
+    if m.undefined is None:
+        return False
+    try:
+        with np.errstate(all="ignore"):
+            return bool(m.undefined(*case.args))
+    except Exception:  # a test undefined on this input leaves the case as evidence
+        return False
 
 
 def _reproduces(m: Misconception, fn: Function, c: CaseResult) -> bool:

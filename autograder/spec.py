@@ -179,6 +179,10 @@ class Misconception:
     case raised (type, message), a sentence on what happened, or None if this mistake does
     not explain it. ``caused_by`` names instead a function of :attr:`Function.uses` whose
     wrong answers, on the failing cases' own arguments, explain this function's failures.
+    ``undefined(*args) -> bool`` marks the cases where the mistaken method has no definite
+    answer (it does not converge, its iterates are chaos that rounding decides): there a
+    failing output neither confirms nor refutes the mistake, and the mistake is named only
+    if the failing cases outside them confirm it (at least one).
     """
 
     key: str
@@ -189,6 +193,7 @@ class Misconception:
     symptom: Callable[..., bool] | None = None
     explains: Callable[..., str | None] | None = None
     caused_by: str | None = None
+    undefined: Callable[..., bool] | None = None
 
     def __post_init__(self) -> None:
         given = [x is not None for x in (self.wrong, self.symptom, self.caused_by)]

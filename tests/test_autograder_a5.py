@@ -15,12 +15,16 @@ from autograder.assignments.a5 import (
     LINE_SEARCH_CASE,
     catmull_rom_variants,
     dense_newton,
+    line_search_iterates,
     newton_iterates,
     spring_hessian,
     squad_formula,
     step_problems,
+    step_reference,
     well_posed,
 )
+from autograder.judging import diagnose
+from autograder.results import CaseResult
 from course.physics import SpringSystem
 from course.physics import step as course_step
 
@@ -57,6 +61,42 @@ def test_squad_written_out_is_the_library_and_without_the_flip_it_is_not():
             assert not squad.check.close(squad_formula(*c.args, shortest=False), expected)
             flipped += 1
     assert flipped >= 6
+
+
+def test_controls_built_before_the_flip_are_named_whichever_way_the_slerps_go():
+    """The controls built from the keys as stored: with the slerps the shortest way (the
+    fixture's) or the inner slerp and the blend as they are (the template's), the same
+    mistake, told apart from the keys left unflipped."""
+    fn = A5.function("squad")
+    for as_they_are in (False, True):
+        results = []
+        for c in visible_cases(A5, "squad"):
+            got = squad_formula(*c.args, controls="stored", as_they_are=as_they_are)
+            expected = fn.reference(*c.args)
+            results.append(CaseResult(c, "pass" if fn.check.close(got, expected) else "wrong",
+                                      got=got, expected=expected))
+        assert sum(not r.passed for r in results) >= 6
+        assert diagnose(A5, fn, results).key == "controls_from_stored_keys"
+
+
+def test_the_frozen_hessian_with_line_search_is_named_by_its_iterates_not_by_nearness():
+    """Its slow iteration passes close to every nearly right answer: an answer a little off
+    the minimiser is not named, the iterate where the template's 50 iterations stop is."""
+    frozen = next(m for m in A5.misconceptions if m.key == "frozen_hessian_line_search")
+    rng = np.random.default_rng(12)
+    stopped = near = 0
+    for c in visible_cases(A5, "implicit_euler_step"):
+        x, h, fixed = c.args[0], c.args[6], c.args[7]
+        *_, z = line_search_iterates(c.args, 50, frozen=True)
+        if step_problems((z, (z - x) / h), *c.args):
+            assert frozen.symptom((z, (z - x) / h), *c.args), c.label
+            stopped += 1
+        off = step_reference(*c.args)[0] + 1e-5 * rng.normal(size=x.shape)
+        off[fixed] = x[fixed]
+        if step_problems((off, (off - x) / h), *c.args):
+            assert not frozen.symptom((off, (off - x) / h), *c.args), c.label
+            near += 1
+    assert stopped >= 3 and near >= 10
 
 
 def test_the_step_reference_is_a_dense_newton_and_the_hessian_its_finite_differences():

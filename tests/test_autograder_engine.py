@@ -195,6 +195,30 @@ def test_a_mistake_is_recognised_one_way_only():
         Misconception("k", "f", "t", "e")
 
 
+
+def test_a_mistake_undefined_on_a_case_is_named_by_the_others_only():
+    """Where a mistake has no definite answer (``undefined``) a failing case neither shows nor
+    refutes it; it is named when the other failing cases show it, never on those alone."""
+    from dataclasses import replace
+
+    from autograder.judging import diagnose
+    from autograder.results import CaseResult
+    from autograder.spec import Case, Misconception
+
+    chaos, plain = Case("chaos", (0.0,)), Case("plain", (1.0,))
+    flip = Misconception("flip", "f", "t", "e", symptom=lambda got, a: got == -a - 1,
+                         undefined=lambda a: a == 0.0)
+    fn = A1.functions[0]
+    one = replace(A1, misconceptions=(flip,), shared=(),
+                  functions=(replace(fn, name="f"),))
+
+    def failing(case: Case, got: float) -> CaseResult:
+        return CaseResult(case, "wrong", "differs", got, 0.0)
+
+    assert diagnose(one, one.functions[0], [failing(chaos, 7.0), failing(plain, -2.0)]) is flip
+    assert diagnose(one, one.functions[0], [failing(chaos, 7.0)]) is None
+    assert diagnose(one, one.functions[0], [failing(chaos, 7.0), failing(plain, 5.0)]) is None
+
 FORK_WHILE_INVERTING = """
 import os, subprocess, sys, time, types
 import numpy as np

@@ -17,7 +17,8 @@ the time limit, and many have compressed springs, where the Hessian's
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from itertools import islice
 from typing import Any
 
 import numpy as np
@@ -63,6 +64,10 @@ class SplineQuatCheck(QuatCheck):
 
     def judge(self, got: Any, expected: Any, args: tuple[Any, ...]) -> str | None:
         return self.compare(got, expected, time_row(args[1], args[2]))
+
+
+#: how a SQUAD answer is compared, with the reference's and with a mistake's
+SQUAD_CHECK = SplineQuatCheck(atol=1e-6, shape=None, row="time")
 
 
 # --- Catmull-Rom -------------------------------------------------------------------------------
@@ -208,35 +213,49 @@ def _towards(a: np.ndarray, b: np.ndarray, u: np.ndarray, shortest: bool) -> np.
 
 
 def squad_formula(q_keys: np.ndarray, times: np.ndarray, t: np.ndarray,
-                  shortest: bool = True, controls: str = "time") -> np.ndarray:
+                  shortest: bool = True, controls: str = "time",
+                  as_they_are: bool = False) -> np.ndarray:
     """Shoemake's SQUAD with the controls of :func:`course.keyframes.squad_controls`, written
     out; ``shortest=False`` skips putting the keys in one hemisphere first and every slerp
     goes the way the signs point. ``controls`` builds them as students get them wrong:
     ``"none"`` (s_i = q_i: plain SLERP between keys), ``"even"`` (Shoemake's
     -(log⁺ + log⁻)/4 on uneven times), ``"swapped"`` (the weights h_{i-1}, h_i swapped),
-    ``"log_order"`` (log(q_{i±1} q_i⁻¹) for log(q_i⁻¹ q_{i±1}))."""
-    q = q_keys / np.linalg.norm(q_keys, axis=-1, keepdims=True)
-    if shortest:
-        q = kf.same_hemisphere(q)
-    s = q.copy()
+    ``"log_order"`` (log(q_{i±1} q_i⁻¹) for log(q_i⁻¹ q_{i±1})), ``"stored"`` (built from
+    the keys as stored, before their hemisphere flip). ``as_they_are``: the inner slerp and
+    the blend as the template says, a⁻¹b with the signs they have (the same as the shortest
+    way on the graded cases, unless the controls are built from the keys as stored)."""
+    stored = q_keys / np.linalg.norm(q_keys, axis=-1, keepdims=True)
+    q = kf.same_hemisphere(stored) if shortest else stored
+    c = stored if controls == "stored" else q  # the keys the controls are built from
+    s = c.copy()
     if len(q) > 2 and controls != "none":
-        inv = rot.quat_conjugate(q[1:-1])
+        inv = rot.quat_conjugate(c[1:-1])
         if controls == "log_order":
-            after, before = (_log(rot.quat_mul(q[2:], inv)), _log(rot.quat_mul(q[:-2], inv)))
+            after, before = (_log(rot.quat_mul(c[2:], inv)), _log(rot.quat_mul(c[:-2], inv)))
         else:
-            after, before = (_log(rot.quat_mul(inv, q[2:])), _log(rot.quat_mul(inv, q[:-2])))
+            after, before = (_log(rot.quat_mul(inv, c[2:])), _log(rot.quat_mul(inv, c[:-2])))
         h = np.diff(times)[:, None]
         w_after, w_before = h[:-1], h[1:]
         if controls == "swapped":
             w_after, w_before = w_before, w_after
         if controls == "even":
             w_after = w_before = np.ones_like(w_after)
-        s[1:-1] = rot.quat_mul(q[1:-1], _exp(-(w_after * after + w_before * before)
+        s[1:-1] = rot.quat_mul(c[1:-1], _exp(-(w_after * after + w_before * before)
                                              / (2 * (w_after + w_before))))
     i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2)
     u = ((t - times[i]) / (times[i + 1] - times[i]))[:, None]
-    return _towards(_towards(q[i], q[i + 1], u, shortest), _towards(s[i], s[i + 1], u, shortest),
-                    2 * u * (1 - u), shortest)
+    flip = shortest and not as_they_are
+    return _towards(_towards(q[i], q[i + 1], u, shortest), _towards(s[i], s[i + 1], u, flip),
+                    2 * u * (1 - u), flip)
+
+
+def _controls_from_stored_keys(got: Any, q_keys: np.ndarray, times: np.ndarray, t: np.ndarray
+                               ) -> bool:
+    """SQUAD with its controls built from the keys as stored, before the hemisphere flip;
+    the inner slerp and the blend the shortest way, or as they are (the template's)."""
+    return any(SQUAD_CHECK.close(got, squad_formula(q_keys, times, t, controls="stored",
+                                                    as_they_are=as_they_are))
+               for as_they_are in (False, True))
 
 
 def _rotation_keys(rng: np.random.Generator, times: np.ndarray, flips: bool, lo: float = 0.3,
@@ -432,13 +451,26 @@ def dense_newton(x: np.ndarray, v: np.ndarray, masses: np.ndarray, springs: np.n
     """Newton's method on E(x) = ‖x - y‖²_M/2h² + U(x), fixed points eliminated, dense, with
     a backtracking line search: the step as a student writes it, independent of
     :mod:`course.physics`'s sparse solver (the tests compare the two)."""
+    *_, xk = line_search_iterates((x, v, masses, springs, rest, k, h, fixed, gravity), max_iter)
+    return xk, (xk - x) / h
+
+
+def line_search_iterates(args: Sequence[Any], max_iter: int = 100, frozen: bool = False
+                         ) -> Iterator[np.ndarray]:
+    """The positions :func:`dense_newton` goes through: z = y (the fixed points held) first,
+    then after each of at most ``max_iter`` iterations, until ‖∇E‖ is below the threshold;
+    ``frozen``: with the Hessian of the start z = y kept throughout (built once, before the
+    loop)."""
+    x, v, masses, springs, rest, k, h, fixed, gravity = args
     system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
     y = x + h * v + h * h * gravity
     xk = y.copy()
     xk[fixed] = x[fixed]
+    yield xk
 
     def energy(z: np.ndarray) -> float:
-        return 0.5 * np.sum(masses[:, None] * (z - y) ** 2) / h**2 + system.spring_energy(z)
+        return float(0.5 * np.sum(masses[:, None] * (z - y) ** 2) / h**2
+                     + system.spring_energy(z))
 
     free = system.free
     g0 = (masses[:, None] * (xk - y) / h**2 + system.spring_gradient(xk))[free]
@@ -450,8 +482,10 @@ def dense_newton(x: np.ndarray, v: np.ndarray, masses: np.ndarray, springs: np.n
                                 float(np.linalg.norm(g0))),
                     100 * np.finfo(float).eps * size * (mass / h**2
                                                         + float(np.linalg.norm(k))))
-    for _ in range(max_iter):
-        H, dof = _free_hessian(xk, masses, springs, rest, k, h, fixed)
+    H, dof = _free_hessian(xk, masses, springs, rest, k, h, fixed)
+    for i in range(max_iter):
+        if i and not frozen:
+            H, dof = _free_hessian(xk, masses, springs, rest, k, h, fixed)
         g = (masses[:, None] * (xk - y) / h**2 + system.spring_gradient(xk)).ravel()[dof]
         if np.linalg.norm(g) <= threshold:
             break
@@ -466,7 +500,7 @@ def dense_newton(x: np.ndarray, v: np.ndarray, masses: np.ndarray, springs: np.n
                 and alpha > 1e-12:
             alpha /= 2
         xk = xk + alpha * move
-    return xk, (xk - x) / h
+        yield xk
 
 
 def _explicit(x: np.ndarray, v: np.ndarray, masses: np.ndarray, springs: np.ndarray,
@@ -494,6 +528,34 @@ def _pushing_springs(got: Any, x: np.ndarray, v: np.ndarray, masses: np.ndarray,
     grad = system.spring_gradient(x_new)[system.free]
     scale = np.linalg.norm(inertial) * np.linalg.norm(grad)
     return bool(np.isfinite(scale) and scale > 0 and np.sum(inertial * grad) > 0.2 * scale)
+
+
+def _flipped_newton_unsettled(x: np.ndarray, v: np.ndarray, masses: np.ndarray,
+                              springs: np.ndarray, rest: np.ndarray, k: np.ndarray, h: float,
+                              fixed: np.ndarray, gravity: np.ndarray) -> bool:
+    """Newton's method on the flipped equation M(z - y)/h² - ∇U(z) = 0 (full steps from y,
+    its Jacobian M/h² - ∇²U) does not settle within 100 iterations: with the force's sign
+    flipped this step has no definite answer (on the h = 1 s cloth every iterate is chaos
+    that rounding decides), so a wrong output there neither shows nor refutes the flip."""
+    system = SpringSystem.create(masses, springs, rest, k, fixed, gravity)
+    free = system.free
+    dof = np.repeat(free, 3)
+    y = x + h * v + h * h * gravity
+    z = y.copy()
+    z[fixed] = x[fixed]
+    threshold = GRAD_TOL * force_scale(x, v, masses, springs, rest, k, h, fixed, gravity)
+    inertia = np.diag(np.repeat(masses, 3) / h**2)
+    for _ in range(100):
+        g = (masses[:, None] * (z - y) / h**2 - system.spring_gradient(z)).ravel()[dof]
+        if not np.all(np.isfinite(g)):
+            return True
+        if np.linalg.norm(g) <= threshold:
+            return False
+        H = (inertia - spring_hessian(z, springs, rest, k))[np.ix_(dof, dof)]
+        flat = np.zeros(3 * len(x))
+        flat[dof] = np.linalg.lstsq(H, -g, rcond=None)[0]
+        z = z + flat.reshape(-1, 3)
+    return True
 
 
 def _fixed_moved(got: Any, x: np.ndarray, v: np.ndarray, masses: np.ndarray,
@@ -594,15 +656,42 @@ def _one_newton_step(*args: Any) -> tuple[np.ndarray, np.ndarray]:
     return x_new, (x_new - args[0]) / args[6]
 
 
-def _frozen_hessian(got: Any, *args: Any) -> bool:
-    """Not optimal, and one of the first 100 iterates of Newton's method with the Hessian
-    of the start z = y kept throughout (built once, before the loop)."""
+def _newton_start(*args: Any) -> tuple[np.ndarray, np.ndarray]:
+    """x⁺ = y, where Newton's method starts (the fixed points held): the loop's result
+    thrown away."""
+    z = next(line_search_iterates(args))
+    return z, (z - args[0]) / args[6]
+
+
+def _an_iterate(got: Any, args: Sequence[Any], iterates: Callable[[], Iterable[np.ndarray]],
+                tolerance: Callable[[np.ndarray], float]) -> bool:
+    """Not optimal, the fixed points held, and within ``tolerance(z)`` of one of the
+    ``iterates`` z of a mistaken Newton."""
     if _fixed_moved(got, *args) or not step_problems(got, *args):
         return False
     x_new = got[0]
-    with np.errstate(all="ignore"):  # where the iteration diverges: to 1e-6 of its size
-        return any(np.max(np.abs(x_new - z)) <= 1e-6 * max(1.0, float(np.max(np.abs(z))))
-                   for z in newton_iterates(args, 100, frozen=True)[1:])
+    with np.errstate(all="ignore"):
+        return any(np.max(np.abs(x_new - z)) <= tolerance(z) for z in iterates())
+
+
+def _frozen_hessian(got: Any, *args: Any) -> bool:
+    """One of the first 100 iterates of Newton's method (full steps) with the Hessian of the
+    start z = y kept throughout (built once, before the loop), to 1e-6 of its size (where
+    the iteration diverges, rounding grows with it)."""
+    return _an_iterate(got, args, lambda: newton_iterates(args, 100, frozen=True)[1:],
+                       lambda z: 1e-6 * max(1.0, float(np.max(np.abs(z)))))
+
+
+def _frozen_hessian_line_search(got: Any, *args: Any) -> bool:
+    """One of the iterates 2 to 100 of the template's Newton (its line search and descent
+    test; the first is one Newton step) with the Hessian of the start z = y kept throughout,
+    to a thousandth of the iterate's distance from the minimiser: a slow iteration passes
+    near any answer that is nearly right, and where it wanders (the line search's case)
+    rounding parts two implementations by some 1e-5 of that distance after 50 iterations."""
+    best = step_reference(*args)[0]
+    return _an_iterate(got, args,
+                       lambda: islice(line_search_iterates(args, 100, frozen=True), 2, None),
+                       lambda z: 1e-3 * float(np.max(np.abs(z - best))))
 
 
 def _needs_line_search(got: Any, *args: Any) -> bool:
@@ -756,6 +845,16 @@ MISCONCEPTIONS = (
         "hemisphere first, q_i ← -q_i when q_i·q_{i-1} < 0, then build the controls and slerp.",
         wrong=lambda q, times, t: squad_formula(q, times, t, shortest=False)),
     Misconception(
+        "controls_from_stored_keys", "squad",
+        "the inner controls built from the keys as stored (before the hemisphere flip)",
+        "Your slerps between the keys go the short way, but your controls s_i were built from "
+        "the keys as they came, some stored as -q: log(q_i⁻¹ q_{i+1}) of two keys with "
+        "q_i·q_{i+1} < 0 is the long way round (more than 180°), so s_i pulls the curve the "
+        "wrong way. Put the keys in one hemisphere FIRST (q_i ← -q_i when q_i·q_{i-1} < 0), "
+        "then build s_i = q_i exp(-(h_{i-1} log(q_i⁻¹q_{i+1}) + h_i log(q_i⁻¹q_{i-1}))/"
+        "(2(h_{i-1} + h_i))) from the flipped keys.",
+        symptom=_controls_from_stored_keys),
+    Misconception(
         "plain_slerp", "squad", "plain SLERP between the keys (no inner control points)",
         "Your curve is slerp(q_i, q_{i+1}, u) on each segment: it turns at a constant rate "
         "and then jerks at every key. SQUAD blends it towards slerp(s_i, s_{i+1}, u) by "
@@ -816,6 +915,15 @@ MISCONCEPTIONS = (
         "times.",
         wrong=_one_newton_step),
     Misconception(
+        "result_thrown_away", "implicit_euler_step",
+        "the Newton loop's result thrown away (x⁺ = y, where Newton starts)",
+        "Your x⁺ is y = x + h v + h² g, the point Newton's method starts from (the fixed "
+        "particles held): your iterations ran, but what they computed never reached the value "
+        "you return. E.g. x_new = z before the loop, then z = z + αΔz makes a NEW array and "
+        "x_new still holds y; or the loop updates a copy that is then dropped. Return the z "
+        "of the last iteration, and v⁺ = (x⁺ - x)/h from it.",
+        wrong=_newton_start),
+    Misconception(
         "frozen_hessian", "implicit_euler_step",
         "the Hessian built once, at the start, with a fixed number of iterations",
         "Your x⁺ is what Newton's method gives when ∇²E is built once, at z = y, before the "
@@ -824,12 +932,22 @@ MISCONCEPTIONS = (
         "test ‖∇E‖ <= threshold (at most 50 iterations), not after a fixed count.",
         symptom=_frozen_hessian),
     Misconception(
+        "frozen_hessian_line_search", "implicit_euler_step",
+        "the Hessian built once, at the start of the step (z = y), and reused",
+        "Your Newton loop is the template's (line search, stopping test, at most 50 "
+        "iterations), but its ∇²E is the one at z = y, built before the loop: each spring's "
+        "block H_s = k_s[(1 - L_s/‖d_s‖) I + (L_s/‖d_s‖) d̂_s d̂_sᵀ] depends on d_s = z_i - z_j, "
+        "so once z moves, ∇²E Δz = -∇E with the old ∇²E is no longer Newton's step: the "
+        "iteration converges only linearly (or not at all), and 50 iterations do not reach "
+        "the minimum. Rebuild ∇²E at the current z in every iteration, as ∇E.",
+        symptom=_frozen_hessian_line_search),
+    Misconception(
         "force_sign", "implicit_euler_step", "the spring force with the wrong sign",
         "∂U/∂x_i = k (1 - L/‖d‖) d with d = x_i - x_j (and the opposite for x_j); the force "
         "is its negative, pulling a stretched spring's ends together. At the right x⁺, "
         "M(x⁺ - y)/h² = -∇U(x⁺); yours moved along +∇U(x⁺), as when the sign is flipped "
         "(Newton then solves M(x - y)/h² - ∇U(x) = 0, or runs uphill in U).",
-        symptom=_pushing_springs),
+        symptom=_pushing_springs, undefined=_flipped_newton_unsettled),
     Misconception(
         "fixed_moved", "implicit_euler_step", "fixed points moved",
         "Fixed particles are not unknowns: drop their rows and columns from ∇E and ∇²E (solve "
@@ -864,7 +982,7 @@ _FUNCTIONS = (
     Function("catmull_rom", ("keys", "times", "t"), lambda *a: kf.catmull_rom(*a),
              SplinePointsCheck(atol=1e-6, row="time")),
     Function("squad", ("q_keys", "times", "t"), lambda *a: kf.squad(*a),
-             SplineQuatCheck(atol=1e-6, shape=None, row="time")),
+             SQUAD_CHECK),
     Function("implicit_euler_step",
              ("x", "v", "masses", "springs", "rest", "k", "h", "fixed", "gravity"),
              step_reference, StepCheck(),
