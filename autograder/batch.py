@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .gradescope.feedback import results_json
+from .gradescope_json import results_json
 from .report import csv_header, csv_row
 from .results import Result
 from .summary import facts

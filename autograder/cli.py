@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--isolation: with --scheduler each worker grades at its strongest; "
                      "give --min-isolation instead")
     try:
-        submissions = collect(args.submissions, spec.template)
+        submissions = collect(args.submissions, spec)
     except ValueError as exc:
         parser.error(str(exc))
     if not submissions:

@@ -1,7 +1,7 @@
 """What a graded submission says, in the words every view shares.
 
 The text and HTML report (:mod:`autograder.report`), Gradescope's results.json
-(:mod:`autograder.gradescope.feedback`) and the class summary (:mod:`autograder.summary`) say
+(:mod:`autograder.gradescope_json`) and the class summary (:mod:`autograder.summary`) say
 the same things of a :class:`~autograder.results.Result`: its header (what was graded, what
 was refused, the notes), per test the lines that explain it, points written alike. They take
 them from here, so no view reads another.

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from .batch import record
+from .intake import SUFFIXES, choose, is_dir
 from .judging import prepare
 from .limits import DEFAULT_LIMITS, Limits
 from .lms import FILES as LMS_FILES
@@ -47,23 +48,20 @@ from .sandbox import FLOOR, level_for
 from .spec import Assignment
 from .submission import SubmissionError, printable, read_regular
 
-SUFFIXES = (".py", ".ipynb")
-MAX_DEPTH = 32  # folder levels searched inside a student's folder
-MAX_ENTRIES = 2000  # files and folders looked at inside a student's folder, in all
 MAX_LISTED = 100_000  # entries of a folder of submissions
 MAX_NAME_BYTES = 200  # of a name, as UTF-8; with "-N" it stays a valid file name everywhere
 RESERVED = frozenset({"grades.csv", "summary.html", *LMS_FILES.values()})  # beside the folders
 STATE = "grading.json"  # beside results.json: what --resume needs of a graded submission
 MAX_STATE = 1 << 20  # bytes of a grading.json
-JUNK = frozenset({"__MACOSX", "__pycache__"})  # an archiver's or Python's, not the student's
 WINDOWS_DEVICES = frozenset({"CON", "PRN", "AUX", "NUL", *(f"COM{i}" for i in range(1, 10)),
                              *(f"LPT{i}" for i in range(1, 10))})
 
 
-def collect(paths: list[Path], template: str) -> list[Submission]:
+def collect(paths: list[Path], spec: Assignment) -> list[Submission]:
     """The submissions in ``paths``: files as given; in a directory, its ``.py`` and
-    ``.ipynb`` files (named by their stem) and its subdirectories holding the template or
-    a single such file (named by the subdirectory, as in a Gradescope or LMS export).
+    ``.ipynb`` files (named by their stem) and its subdirectories, each the file that
+    :func:`autograder.intake.choose` picks (named by the subdirectory, as in a Gradescope
+    or LMS export).
 
     No link is followed into and no file read here: a link or special file given, or where
     a file or a student's folder would be, is a submission that :func:`grade` refuses with
@@ -80,13 +78,13 @@ def collect(paths: list[Path], template: str) -> list[Submission]:
                              + ("does not exist" if isinstance(exc, FileNotFoundError)
                                 else f"cannot be read ({exc.strerror})")) from None
         if stat.S_ISDIR(mode):
-            found += _in_folder(p, template)
+            found += _in_folder(p, spec)
         else:
             found.append(Submission(p.stem, p))
     return unique(found)
 
 
-def _in_folder(folder: Path, template: str) -> list[Submission]:
+def _in_folder(folder: Path, spec: Assignment) -> list[Submission]:
     try:
         with os.scandir(folder) as it:
             entries = sorted(itertools.islice(it, MAX_LISTED + 1), key=lambda e: e.name)
@@ -99,8 +97,8 @@ def _in_folder(folder: Path, template: str) -> list[Submission]:
     found = []
     for e in entries:
         path = Path(e.path)
-        if _is_dir(e):
-            inner = _one_submission(path, template)
+        if is_dir(e):
+            inner = _one_submission(path, spec)
             if inner:
                 found.append(replace(inner, folder=path))
         elif path.suffix in SUFFIXES:  # a link, pipe or socket too: refused when read
@@ -110,62 +108,13 @@ def _in_folder(folder: Path, template: str) -> list[Submission]:
     return found
 
 
-def _is_dir(entry: os.DirEntry[str]) -> bool:
-    try:
-        return entry.is_dir(follow_symlinks=False)
-    except OSError:
-        return False
-
-
-def _one_submission(folder: Path, template: str) -> Submission | None:
-    """A student's folder: its template file (whatever that is: a link there is refused,
-    not passed over), else its only ``.py``/``.ipynb`` file; a refusal if it has several
-    or could not be searched to the end; None if it has none."""
-    stem = Path(template).stem
-    for suffix in SUFFIXES:
-        if os.path.lexists(folder / f"{stem}{suffix}"):
-            return Submission(folder.name, folder / f"{stem}{suffix}")
-    files, cut = _search(folder)
-    shown = printable(folder)
-    if cut:
-        return Submission(folder.name, folder, f"{shown} has no {template} and could not be "
-                                               f"searched for one: {cut}")
-    if len(files) > 1:
-        some = ", ".join(printable(f.relative_to(folder)) for f in files[:3])
-        more = f" and {len(files) - 3} more" if len(files) > 3 else ""
-        return Submission(folder.name, folder, f"{shown} has no {template} but {len(files)} "
-                                               f".py/.ipynb files ({some}{more}): cannot tell "
-                                               "which one to grade")
-    return Submission(folder.name, files[0]) if files else None
-
-
-def _search(folder: Path) -> tuple[list[Path], str]:
-    """The ``.py``/``.ipynb`` entries below ``folder`` (hidden ones and links to folders
-    left out), and why the search stopped short if it did. Iterative, never following a
-    link, at most :data:`MAX_DEPTH` levels and :data:`MAX_ENTRIES` entries."""
-    found: list[Path] = []
-    stack, seen = [(folder, 1)], 0
-    while stack:
-        here, depth = stack.pop()
-        try:
-            with os.scandir(here) as it:
-                entries = sorted(itertools.islice(it, MAX_ENTRIES - seen + 1),
-                                 key=lambda e: e.name)
-        except OSError as exc:
-            return found, f"a folder in it cannot be read ({exc.strerror})"
-        seen += len(entries)
-        if seen > MAX_ENTRIES:
-            return found, f"it holds more than {MAX_ENTRIES} files and folders"
-        for e in reversed(entries):  # popped in name order
-            if e.name.startswith(".") or e.name in JUNK:
-                continue
-            if _is_dir(e):
-                if depth >= MAX_DEPTH:
-                    return found, f"its folders nest deeper than {MAX_DEPTH} levels"
-                stack.append((Path(e.path), depth + 1))
-            elif Path(e.path).suffix in SUFFIXES:
-                found.append(Path(e.path))
-    return sorted(found), ""
+def _one_submission(folder: Path, spec: Assignment) -> Submission | None:
+    """A student's folder: the file :func:`autograder.intake.choose` picks, a refusal saying
+    why none can be, or None if it holds no ``.py``/``.ipynb`` file."""
+    choice = choose(folder, spec.template, [f.name for f in spec.functions])
+    if choice.path is not None:
+        return Submission(folder.name, choice.path)
+    return Submission(folder.name, folder, choice.refused) if choice.refused else None
 
 
 def safe_name(raw: str) -> str:

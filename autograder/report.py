@@ -1,6 +1,6 @@
 """Reports of a graded submission: text (terminal), HTML (notebook), CSV.
 
-They, and Gradescope's results.json (:mod:`autograder.gradescope.feedback`), say the same
+They, and Gradescope's results.json (:mod:`autograder.gradescope_json`), say the same
 things, shortly: per test, the points, how many cases passed, the known mistake the failures
 match (with the lecture's formula), and the first failing case with its inputs, what came
 back and what was expected.

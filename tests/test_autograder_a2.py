@@ -76,7 +76,7 @@ def test_scored_cases_are_the_same_on_every_machine(monkeypatch):
 
 
 def test_the_real_clips_here_add_unscored_tests(shared_bvh_dir, tmp_path):
-    from autograder.gradescope.feedback import results_json
+    from autograder.gradescope_json import results_json
     from autograder.judging import prepare
     from autograder.report import csv_header
 

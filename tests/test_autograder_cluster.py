@@ -77,7 +77,7 @@ def cluster():
 
 @pytest.fixture(scope="module")
 def students(tmp_path_factory):
-    return collect([class_folder(tmp_path_factory.mktemp("class"))], A1.template)
+    return collect([class_folder(tmp_path_factory.mktemp("class"))], A1)
 
 
 class Killer(WorkerPlugin):
@@ -163,7 +163,7 @@ def _allow_failures(dask_scheduler=None, n: int = 2) -> None:
 
 def test_resume_skips_what_is_unchanged_and_regrades_what_changed(cluster, tmp_path,
                                                                    monkeypatch):
-    subs = collect([class_folder(tmp_path / "class", CLASS[:3])], A1.template)
+    subs = collect([class_folder(tmp_path / "class", CLASS[:3])], A1)
     out = tmp_path / "out"
     grade(A1, subs, out, seed=SEED, limits=LIMITS, progress=None,
           scheduler=cluster.scheduler_address)  # the cluster's records are resumable here
@@ -189,7 +189,7 @@ def test_resume_skips_what_is_unchanged_and_regrades_what_changed(cluster, tmp_p
 
 @pytest.mark.skipif(probe().level != "bubblewrap", reason="needs a machine with bubblewrap")
 def test_workers_weaker_than_min_isolation_are_refused_by_name(tmp_path):
-    subs = collect([class_folder(tmp_path / "class", ["reference"])], A1.template)
+    subs = collect([class_folder(tmp_path / "class", ["reference"])], A1)
     # no bwrap on the worker's PATH: it reaches a weaker level than this machine
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
                       silence_logs=logging.ERROR, env={"PATH": "/nonexistent"}) as weak:

@@ -14,7 +14,7 @@ from autograder import Limits, check
 from autograder.assignments import load
 from autograder.checks import MatrixCheck, QuatCheck, TupleCheck
 from autograder.cli import main
-from autograder.gradescope.feedback import results_json
+from autograder.gradescope_json import results_json
 from autograder.protocol import (
     ProtocolError,
     Value,

@@ -117,7 +117,7 @@ def graded_class(tmp_path_factory) -> Path:
     metadata(subs / "gs_1", {"name": "Cy", "email": "cy@uni.edu", "sid": "42"})
     (subs / "dee & co").mkdir()
     (subs / "dee & co" / "a1_rotations.py").write_text(f"raise ValueError({HOSTILE!r})\n")
-    grade(A1, collect([subs], A1.template), root / "out", seed="gradebook-seed",
+    grade(A1, collect([subs], A1), root / "out", seed="gradebook-seed",
           limits=LIMITS, progress=None, lms=list(FILES))
     return root / "out"
 

@@ -23,8 +23,8 @@ from pathlib import Path
 import pytest
 
 from autograder.cli import main
-from autograder.gradescope.feedback import code_block, markdown_text
-from autograder.gradescope.schema import problems
+from autograder.gradescope_json import code_block, markdown_text
+from autograder.gradescope_schema import problems
 
 REPO = Path(__file__).resolve().parents[1]
 FIXTURES = REPO / "tests" / "fixtures"

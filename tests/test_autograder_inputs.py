@@ -19,7 +19,8 @@ from test_autograder_fixtures import FIXTURES, REPO
 from autograder.assignments import load
 from autograder.cli import main
 from autograder.findings import MAX_LINE
-from autograder.grading import MAX_DEPTH, Submission, collect, grade, safe_name, unique
+from autograder.grading import Submission, collect, grade, safe_name, unique
+from autograder.intake import MAX_DEPTH
 from autograder.output import csv_cell
 from autograder.sandbox import Outcome, Sandbox
 from autograder.submission import SubmissionError, import_problems, source_from_notebook
@@ -234,14 +235,15 @@ def test_collect_follows_no_link_and_passes_over_nothing(tmp_path):
     write(subs / "cy" / "one.py", "")
     write(subs / "cy" / "two.py", "")
     (subs / "empty").mkdir()
-    found = {s.name: s for s in collect([subs], "a1_rotations.py")}
+    found = {s.name: s for s in collect([subs], A1)}
     assert set(found) == {"ann", "bob", "cy"}
     assert found["ann"].path == subs / "ann" / "a1_rotations.py" and not found["ann"].refused
     assert found["bob"].path == subs / "bob" / "work.ipynb"
     assert found["cy"].refused == (f"{subs / 'cy'} has no a1_rotations.py but 2 .py/.ipynb "
-                                   "files (one.py, two.py): cannot tell which one to grade")
+                                   "files (one.py, two.py; none defines any of its functions): "
+                                   "cannot tell which one to grade")
     with pytest.raises(ValueError, match="does not exist"):
-        collect([tmp_path / "nothing"], "a1_rotations.py")
+        collect([tmp_path / "nothing"], A1)
 
 
 def test_results_are_never_written_through_a_link_in_out(tmp_path, capsys):

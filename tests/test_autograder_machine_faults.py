@@ -99,7 +99,7 @@ def test_a_classmate_holding_every_thread_it_may_costs_no_one_a_point(level, tmp
     """Three correct submissions graded at once beside one that holds as many threads as its
     sandbox lets it start, on each of its calls: every one gets full marks, the holder too."""
     students = {"holder": "adv_threads", **{f"honest{i}": "reference" for i in range(3)}}
-    subs = collect([class_folder(tmp_path / "class", students)], A1.template)
+    subs = collect([class_folder(tmp_path / "class", students)], A1)
     out = tmp_path / "out"
     grade(A1, subs, out, jobs=4, seed="threads-seed", limits=LIMITS, level=level,
           progress=None)
@@ -189,7 +189,7 @@ def test_a_grader_fault_is_not_graded_either(tmp_path, monkeypatch):
     monkeypatch.setattr(grading, "run", broken)
     out = tmp_path / "out"
     folder = class_folder(tmp_path / "class", {"carol": "reference"})
-    grade(A1, collect([folder], A1.template), out, progress=None)
+    grade(A1, collect([folder], A1), out, progress=None)
     row = rows(out)["carol"]
     assert row["status"] == "not graded" and row["score"] == ""
     assert "the grader failed (KeyError: 'a bug'); please report this" in row["reason"]
@@ -205,7 +205,7 @@ def test_the_pool_and_the_cluster_give_one_score_under_load(tmp_path):
              "adv_threads", "adv_fork", "adv_memory_bomb", "adv_garbage_bytes",
              "adv_huge_answer", "adv_hook_tampering", "adv_fake_refusal", "adv_forged_recursion",
              "adv_tcl_exec"]
-    subs = collect([class_folder(tmp_path / "class", {n: n for n in names})], A1.template)
+    subs = collect([class_folder(tmp_path / "class", {n: n for n in names})], A1)
     runs: dict[str, list[dict[str, tuple[str, ...]]]] = {"pool": [], "cluster": []}
 
     def graded(out: Path) -> dict[str, tuple[str, ...]]:

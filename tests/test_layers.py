@@ -294,7 +294,7 @@ def reach(graph: dict[str, list[Import]], start: str) -> set[str]:
 
 
 VIEWS = {"autograder.findings", "autograder.report", "autograder.figures", "autograder.summary",
-         "autograder.gradescope.feedback", "autograder.lms", "autograder.output",
+         "autograder.gradescope_json", "autograder.lms", "autograder.output",
          "autograder.batch"}
 JUDGING_CORE = {"autograder.judging", "autograder.results", "autograder.spec",
                 "autograder.checks", "autograder.catalogue", "autograder.protocol",

@@ -22,24 +22,23 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import sys
 import traceback
 from importlib.metadata import version
 from pathlib import Path
 from typing import Any
 
+from .. import intake
 from ..assignments import load
-from ..grading import JUNK, MAX_DEPTH, MAX_ENTRIES, SUFFIXES
+from ..gradescope_json import results_json
+from ..gradescope_schema import problems
 from ..judging import prepare
 from ..output import create
 from ..records import not_run
 from ..runner import run
 from ..sandbox import FLOOR, Isolation, level_for, weaker_warning
 from ..spec import Assignment
-from ..submission import SubmissionError, printable, read_regular
-from .feedback import results_json
-from .schema import problems
+from ..submission import printable, read_regular
 
 SOURCE = Path(__file__).resolve().parents[2]  # the bundle's root: $AUTOGRADER_ROOT/source
 CONFIG = "bundle.env"  # ASSIGNMENT=a1, PYTHON_VERSION=3.11, NUMPY_VERSION=2.4.6
@@ -149,63 +148,17 @@ def _users(metadata: dict[str, Any]) -> str:
 
 
 def choose(folder: Path, spec: Assignment) -> tuple[Path | None, str]:
-    """The file of ``folder`` to grade, and a sentence saying which and why (or why none).
-
-    Gradescope passes whatever the student uploaded, under any name: one ``.py`` or
-    ``.ipynb``, several, or folders of them. The file that defines the most of the
-    assignment's functions is graded; on a tie, the one named like the template, then a
-    ``.py`` before a notebook, then the shallowest, then by name.
-    """
-    found = candidates(folder)
-    if not found:
-        return None, (f"No .py or .ipynb file was found in your submission: upload "
-                      f"{spec.template} (or your notebook).")
-    names = [f.name for f in spec.functions]
-    template = Path(spec.template)
-    scored = []
-    for path in found:
-        defined = defines(path, names)
-        rel = path.relative_to(folder)
-        scored.append(((-len(defined), path.stem != template.stem, path.suffix != ".py",
-                        len(rel.parts), str(rel)), path, defined))
-    _, best, defined = min(scored)
-    shown = printable(best.relative_to(folder))
-    if len(found) == 1:
-        return best, f"Graded {shown}."
-    if not defined:
-        return best, (f"Graded {shown}: none of your {len(found)} files defines any of "
-                      f"{', '.join(names)}.")
-    return best, (f"Graded {shown}, the one of your {len(found)} files that defines the most "
-                  f"of the assignment's functions ({len(defined)} of {len(names)}).")
-
-
-def candidates(folder: Path) -> list[Path]:
-    """The ``.py`` and ``.ipynb`` entries below ``folder`` (links too: refused when read),
-    hidden ones and an archiver's or Python's folders left out, no link followed, at most
-    :data:`MAX_DEPTH` levels and :data:`MAX_ENTRIES` entries looked at."""
-    found: list[Path] = []
-    seen = 0
-    for here, dirs, files in os.walk(folder):  # os.walk follows no link to a folder
-        depth = len(Path(here).relative_to(folder).parts)
-        dirs[:] = sorted(d for d in dirs if not d.startswith(".") and d not in JUNK
-                         and depth < MAX_DEPTH)
-        seen += len(dirs) + len(files)
-        found += [Path(here) / f for f in sorted(files)
-                  if Path(f).suffix in SUFFIXES and not f.startswith(".")]
-        if seen > MAX_ENTRIES:
-            break
-    return found
-
-
-def defines(path: Path, names: list[str]) -> list[str]:
-    """Which of ``names`` ``path`` defines with a ``def`` (in a notebook, in a code cell's
-    JSON string); read as text, so a file that does not parse still counts."""
-    try:
-        text = read_regular(path)
-    except (SubmissionError, OSError):
-        return []
-    defined = set(re.findall(r'(?:^|")[ \t]*def[ \t]+(\w+)[ \t]*\(', text, re.MULTILINE))
-    return [n for n in names if n in defined]
+    """The file of ``folder`` to grade (:func:`autograder.intake.choose`: the policy of the
+    local pool and the cluster too), and a sentence for the student saying which and why (or
+    why none)."""
+    choice = intake.choose(folder, spec.template, [f.name for f in spec.functions],
+                           shown="your submission")
+    if choice.path is not None:
+        return choice.path, choice.said
+    return None, (f"{choice.refused[0].upper()}{choice.refused[1:]}: upload one file, or name "
+                  f"the one to grade {spec.template}." if choice.refused else
+                  f"No .py or .ipynb file was found in your submission: upload "
+                  f"{spec.template} (or your notebook).")
 
 
 def check_install() -> None:

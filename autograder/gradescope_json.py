@@ -10,9 +10,9 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from ..findings import MAX_FIELD, bounded, header, points, scored, test_lines
-from ..results import Result, TestResult
-from ..spec import Misconception
+from .findings import MAX_FIELD, bounded, header, points, scored, test_lines
+from .results import Result, TestResult
+from .spec import Misconception
 
 # Parentheses stay: they act only after a "]" (escaped here), and "\(" is an inline-math
 # delimiter where MathJax renders the page.
