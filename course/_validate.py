@@ -6,6 +6,7 @@ message that names the argument and says what is wrong with it.
 
 from __future__ import annotations
 
+import math
 import numbers
 
 import numpy as np
@@ -92,6 +93,28 @@ def as_time_step(h: float) -> float:
     if not scalar or not np.isfinite(h) or h <= 0:
         raise ValueError(f"h: the time step must be a positive finite number, got {h!r}")
     return float(h)
+
+
+def as_positive(value: float, name: str, *, allow_zero: bool = False,
+                allow_inf: bool = False) -> float:
+    """``value`` as a float; a ValueError naming ``name`` unless it is one real number above
+    zero (or at least zero with ``allow_zero``), finite (or ``+inf`` with ``allow_inf``, e.g. a
+    limit that is off)."""
+    if allow_inf and isinstance(value, numbers.Real) and value == math.inf:
+        return math.inf
+    a = as_array(value, name)
+    if a.ndim != 0 or not (a >= 0 if allow_zero else a > 0):
+        want = "non-negative" if allow_zero else "positive"
+        raise ValueError(f"{name}: must be a {want} number, got {value!r}")
+    return float(a)
+
+
+def as_count(value: int, name: str, minimum: int = 1) -> int:
+    """``value`` as an int of at least ``minimum``; a ValueError naming ``name`` unless it is a
+    whole number (an int or a numpy integer; not a bool, not a float such as ``10.0``)."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise ValueError(f"{name}: a whole number, at least {minimum}, got {value!r}")
+    return int(value)
 
 
 def as_radians(angle: Array, degrees: bool) -> Array:

@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from ._typing import Array
 from ._validate import as_array, broadcast_leading
 from .rotations import _kernels
+from .rotations._kernels import Quat, q_mul
 
 # How far |q|^2 may be from 1 before a rotation is rejected as not a unit quaternion: loose
 # enough for quaternions stored in float32, tight enough to catch unnormalised input, which
@@ -232,7 +233,7 @@ class _Walk(Generic[V]):
                     self.rotate_add(j, src, src, bone, 1)
 
 
-class _FloatWalk(_Walk[list[float]]):
+class _FloatWalk(_Walk[Sequence[float]]):
     """One frame in Python floats: for a single pose (an IK solver calls this thousands of
     times) plain float arithmetic costs far less than numpy calls on length-1 arrays."""
 
@@ -240,30 +241,23 @@ class _FloatWalk(_Walk[list[float]]):
         self.R: list[list[float]] = R.tolist()
         self.L: list[list[float]] = L.tolist()
         # Empty until the walk fills them, each before it is read.
-        self.Q: list[list[float]] = [[]] * len(self.R)
-        self.P: list[list[float]] = [[]] * len(self.R)
+        self.Q: list[Quat] = [(1.0, 0.0, 0.0, 0.0)] * len(self.R)
+        self.P: list[Sequence[float]] = [[]] * len(self.R)
 
-    def set_orientation(self, j: int, q: list[float]) -> None:
-        self.Q[j] = q
+    def set_orientation(self, j: int, q: Sequence[float]) -> None:
+        w, x, y, z = q
+        self.Q[j] = (w, x, y, z)
 
-    def set_position(self, j: int, p: list[float]) -> None:
+    def set_position(self, j: int, p: Sequence[float]) -> None:
         self.P[j] = p
 
-    def rotation(self, j: int) -> list[float]:
+    def rotation(self, j: int) -> Sequence[float]:
         return self.R[j]
 
-    def product(self, j: int, src: int, r: list[float], conjugate: bool) -> None:
-        """``Q_j = Q_src r`` (or ``Q_src r^*``), the Hamilton product written out."""
-        aw, ax, ay, az = self.Q[src]
-        bw, bx, by, bz = r
-        if conjugate:
-            bx, by, bz = -bx, -by, -bz
-        self.Q[j] = [
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ]
+    def product(self, j: int, src: int, r: Sequence[float], conjugate: bool) -> None:
+        """``Q_j = Q_src r`` (or ``Q_src r^*``): the kernel's Hamilton product."""
+        w, x, y, z = r
+        self.Q[j] = q_mul(self.Q[src], (w, -x, -y, -z) if conjugate else (w, x, y, z))
 
     def rotate_add(self, j: int, src: int, x: int, bone: int, sign: int) -> None:
         """``p_j = p_src + sign * Q_x l_bone`` as ``v + 2w (u x v) + u x (2 u x v)``."""

@@ -24,6 +24,13 @@ Standing and pushed (lecture 10, ``docs/physics.md``)::
 
     from course.physics import Push, stand
     run = stand(character, controller="com", push=Push("Hips", (150, 0, 0), 0.5, 0.1))
+
+Both are compositions of one simulation loop and a controller that supplies only torques
+(``course.physics.simulation``, ``course.physics.controllers``)::
+
+    from course.physics import PD, Simulation
+    sim = Simulation(character, qpos, frame_time=1 / 60, h=1 / 600)
+    record = sim.run(PD(qpos, kp=1000, kd=5), n_frames=61)
 """
 
 from typing import Any
@@ -94,14 +101,30 @@ _CHARACTER = (
 
 #: Names served lazily from course.physics.balance (lecture 10's static balance, mujoco too).
 _BALANCE = (
+    "AnkleStrategy",
     "BalanceResult",
+    "COMBalance",
     "largest_push",
     "stand",
     "standing_pose",
 )
 
 
+#: Names served lazily from course.physics.simulation and .controllers (the loop and the
+#: controller interface; mujoco on first use too).
+_SIMULATION = ("Fall", "HeldRoot", "Recording", "Simulation")
+_CONTROLLERS = ("PD", "Controller", "StablePD")
+
+
 def __getattr__(name: str) -> Any:
+    if name in _SIMULATION:
+        from . import simulation
+
+        return getattr(simulation, name)
+    if name in _CONTROLLERS:
+        from . import controllers
+
+        return getattr(controllers, name)
     if name in _CHARACTER:
         from . import character
 
@@ -116,6 +139,8 @@ def __getattr__(name: str) -> Any:
 __all__ = [
     *_CHARACTER,
     *_BALANCE,
+    *_SIMULATION,
+    *_CONTROLLERS,
     "BEND",
     "GRAVITY",
     "INTEGRATORS",

@@ -2,7 +2,7 @@
 
 A character from :func:`course.physics.character.build_model` stands on both feet in
 :func:`standing_pose`. :func:`stand` simulates it for a while, optionally pushed
-(:class:`~course.physics.character.Push`), under one of three controllers named after the
+(:class:`~course.physics.simulation.Push`), under one of three controllers named after the
 lecture:
 
 ``"none"``
@@ -17,6 +17,12 @@ lecture:
     the same force turned into torques on every joint of the leg chains from the stance feet
     to the root, :math:`\\tau = \\tilde J^\\top f`, plus gravity compensation: the virtual force
     :math:`m g` upwards through the same Jacobian (each foot carries half).
+
+Each is a :class:`~course.physics.simulation.Controller` on the one simulation loop,
+:class:`~course.physics.simulation.Simulation`: ``"none"`` is
+:class:`~course.physics.controllers.PD`, ``"ankle"`` and ``"com"`` are :class:`AnkleStrategy`
+and :class:`COMBalance` (both a :class:`VirtualForce`), and :func:`stand` is their
+composition.
 
 :math:`\\tilde J` is the COM Jacobian with the stance foot fixed: with ``J_c`` from
 ``mj_jacSubtreeCom`` (the floating-base COM Jacobian, 3 x nv) and ``J_f`` from ``mj_jacBody``
@@ -33,7 +39,7 @@ the force. MuJoCo's frames are z-up; everything returned here is y-up meters.
 from __future__ import annotations
 
 import math
-import time
+from abc import abstractmethod
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -41,17 +47,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._typing import Array
+from .._validate import as_positive
 from ..motion import Motion
-from .character import (
+from ..rotations._kernels import quat_between, quat_conjugate, quat_from_rotvec, quat_mul
+from .controllers import PD
+from .model import (
     Y_TO_Z_MATRIX,
     Character,
-    Push,
     import_mujoco,
     motion_from_qpos,
     qpos_from_motion,
 )
-
-Array = NDArray[np.float64]
+from .simulation import Fall, Push, Simulation
 
 #: The controllers :func:`stand` knows.
 CONTROLLERS = ("none", "ankle", "com")
@@ -91,44 +99,6 @@ def foot_chains(character: Character) -> tuple[tuple[int, ...], ...]:
             "lowest point of the rest pose); standing needs two"
         )
     return tuple(chains)
-
-
-def _rotation_between(a: Array, b: Array) -> Array:
-    """Unit quaternion of the smallest rotation taking direction ``a`` to direction ``b``."""
-    a = a / np.linalg.norm(a)
-    b = b / np.linalg.norm(b)
-    axis = np.cross(a, b)
-    s = float(np.linalg.norm(axis))
-    c = float(np.dot(a, b))
-    if s < 1e-12:
-        return np.array([1.0, 0.0, 0.0, 0.0])
-    angle = math.atan2(s, c)
-    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis / s])
-
-
-def _qmul(a: Array, b: Array) -> Array:
-    aw, ax, ay, az = a
-    bw, bx, by, bz = b
-    return np.array(
-        [
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ]
-    )
-
-
-def _qinv(q: Array) -> Array:
-    out: Array = q * np.array([1.0, -1.0, -1.0, -1.0])
-    return out
-
-
-def _rotvec_quat(w: Array) -> Array:
-    angle = float(np.linalg.norm(w))
-    if angle < 1e-15:
-        return np.array([1.0, 0.0, 0.0, 0.0])
-    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * w / angle])
 
 
 def _com_y_up(character: Character, data: Any) -> Array:
@@ -181,7 +151,7 @@ def standing_pose(character: Character) -> Motion:
         for j, c in zip(chain[:-1], chain[1:], strict=True):
             d = skel.offsets[c].astype(float)
             flat = d * np.array([1.0, 0.0, 1.0])
-            level[j] = _rotation_between(d, flat) if np.linalg.norm(flat) > 1e-9 else np.array(
+            level[j] = quat_between(d, flat) if np.linalg.norm(flat) > 1e-9 else np.array(
                 [1.0, 0.0, 0.0, 0.0]
             )
     legs = {a for chain in feet for a in _ancestors(skel, chain[0])}
@@ -195,16 +165,16 @@ def standing_pose(character: Character) -> Motion:
     def make(params: Array) -> tuple[Motion, Array]:
         tilt = np.array([params[0], 0.0, params[1]])
         roll = params[2] * forward
-        local[0, 0] = _qmul(_rotvec_quat(tilt), _rotvec_quat(roll))
+        local[0, 0] = quat_mul(quat_from_rotvec(tilt), quat_from_rotvec(roll))
         for c in upper:  # the roll is for the legs: the upper body keeps the tilt only
-            local[0, c] = _qinv(_rotvec_quat(roll))
+            local[0, c] = quat_conjugate(quat_from_rotvec(roll))
         # feet flat whatever the tilt: local = parent's global^-1 * wanted global
         bare = Motion(skel, local.copy(), np.zeros((1, 3)), 1.0 / 60.0)
         _, rotations = bare.forward_kinematics()
         for chain in feet:
             g_parent = rotations[0, skel.parents[chain[0]]]
             for j in chain[:-1]:
-                local[0, j] = _qmul(_qinv(g_parent), level[j])
+                local[0, j] = quat_mul(quat_conjugate(g_parent), level[j])
                 g_parent = level[j]
         motion = Motion(skel, local.copy(), np.zeros((1, 3)), 1.0 / 60.0, name="standing")
         positions, _ = motion.forward_kinematics()
@@ -256,7 +226,7 @@ def com_jacobian(character: Character, model: Any, data: Any) -> Array:
     return jac
 
 
-def _ancestor_dofs(character: Character, model: Any, body: int) -> Array:
+def _ancestor_dofs(character: Character, model: Any, body: int) -> NDArray[np.intp]:
     """DOF indices of ``body`` and its ancestors' ball joints (the root's excluded)."""
     dofs: list[int] = []
     b = body
@@ -264,7 +234,7 @@ def _ancestor_dofs(character: Character, model: Any, body: int) -> Array:
         adr = int(model.body_dofadr[b])
         dofs.extend(range(adr, adr + int(model.body_dofnum[b])))
         b = int(model.body_parentid[b])
-    return np.array(sorted(dofs), dtype=int)
+    return np.array(sorted(dofs), dtype=np.intp)
 
 
 def stance_com_jacobian(character: Character, model: Any, data: Any, foot_body: int) -> Array:
@@ -278,6 +248,95 @@ def stance_com_jacobian(character: Character, model: Any, data: Any, foot_body: 
     jf = np.vstack([jp, jr])
     out: Array = jc - jc[:, :6] @ np.linalg.solve(jf[:, :6], jf)
     return out
+
+
+# -- the balance controllers ------------------------------------------------------------------
+
+
+class VirtualForce(PD):
+    r"""Joint PD holding a pose plus a horizontal virtual force on the COM, through each
+    stance foot's COM Jacobian transposed (module docstring).
+
+    :math:`f = k_{p,c}(\bar c - c) - k_{d,c}\dot c`, its vertical part dropped, plus
+    :math:`m g` upwards with ``gravity_compensation``, shared equally by the feet; per foot
+    :math:`\tau = \tilde J^\top f` on the DOFs :meth:`dofs` picks. :math:`\bar c` is the COM
+    when the run starts (:meth:`reset`).
+
+    Parameters
+    ----------
+    character : Character
+    target : ndarray, shape (nq,)
+        The pose held by the joint PD.
+    kp, kd : float
+        Joint PD gains (N m/rad, N m s/rad).
+    com_kp, com_kd : float
+        COM PD gains (N/m, N s/m).
+    gravity_compensation : bool
+        Add :math:`\tilde J^\top (m g)`.
+    """
+
+    def __init__(self, character: Character, target: Array, *, kp: float, kd: float,
+                 com_kp: float, com_kd: float, gravity_compensation: bool) -> None:
+        super().__init__(target, kp, kd)
+        self.character = character
+        self.com_kp = as_positive(com_kp, "com_kp", allow_zero=True)
+        self.com_kd = as_positive(com_kd, "com_kd", allow_zero=True)
+        self.gravity_compensation = bool(gravity_compensation)
+
+    @abstractmethod
+    def dofs(self, model: Any, foot_body: int) -> NDArray[np.intp]:
+        """The DOFs the force of the foot ``foot_body`` acts through."""
+
+    def reset(self, sim: Simulation) -> None:
+        r"""As :class:`~course.physics.controllers.PD`; the feet, their DOFs, the mass and the
+        COM target :math:`\bar c` (the current COM)."""
+        super().reset(sim)
+        model = sim.model
+        self._feet = [self.character.bodies[c[0]] for c in foot_chains(self.character)]
+        self._dofs = [self.dofs(model, b) for b in self._feet]
+        mass = float(np.sum(model.body_mass))
+        self.com_target = sim.data.subtree_com[self.character.bodies[0]].copy()  # z-up
+        self._weight = (np.array([0.0, 0.0, mass * _GRAVITY]) if self.gravity_compensation
+                        else np.zeros(3))
+
+    def torques(self, sim: Simulation, t: float) -> Array:
+        r"""The joint PD's torques plus each foot's :math:`\tilde J^\top f`."""
+        tau = super().torques(sim, t)
+        model, data, character = sim.model, sim.data, self.character
+        jc = com_jacobian(character, model, data)
+        c = data.subtree_com[character.bodies[0]]
+        cdot = jc @ data.qvel
+        f = self.com_kp * (self.com_target - c) - self.com_kd * cdot
+        f[2] = 0.0  # horizontal
+        f = (f + self._weight) / len(self._feet)
+        for b, dofs in zip(self._feet, self._dofs, strict=True):
+            jt = stance_com_jacobian(character, model, data, b)
+            tau[dofs] += jt[:, dofs].T @ f
+        return tau
+
+
+class AnkleStrategy(VirtualForce):
+    """The ankle strategy 踝关节策略: the virtual force through the ankles' DOFs only
+    (``stand(controller="ankle")``)."""
+
+    def dofs(self, model: Any, foot_body: int) -> NDArray[np.intp]:
+        """The ankle's three DOFs (its ball joint)."""
+        adr = int(model.body_dofadr[foot_body])
+        return np.arange(adr, adr + 3, dtype=np.intp)
+
+
+class COMBalance(VirtualForce):
+    """Jacobian transpose 雅可比转置 on the COM: the virtual force through every joint of the
+    leg chain from the foot to the root (``stand(controller="com")``)."""
+
+    def dofs(self, model: Any, foot_body: int) -> NDArray[np.intp]:
+        """The ball-joint DOFs from the foot up to the root (the root's excluded)."""
+        return _ancestor_dofs(self.character, model, foot_body)
+
+
+#: :func:`stand`'s COM controllers by name.
+BALANCE_CONTROLLERS: dict[str, type[VirtualForce]] = {"ankle": AnkleStrategy,
+                                                      "com": COMBalance}
 
 
 # -- standing --------------------------------------------------------------------------------
@@ -363,7 +422,8 @@ def stand(
     duration : float
         Simulated seconds.
     h : float
-        Requested step; rounded so a whole number fits ``frame_time``.
+        The step; it must divide ``frame_time`` (a ValueError names ``h`` otherwise,
+        :func:`~course.physics.simulation.substeps`).
     kp, kd : float
         Joint PD gains (N m/rad, N m s/rad), every ball joint, all controllers.
     controller : {"none", "ankle", "com"}
@@ -394,100 +454,39 @@ def stand(
     """
     if controller not in CONTROLLERS:
         raise ValueError(f"controller: {controller!r} is not one of {CONTROLLERS}")
-    if not (duration > 0 and h > 0 and frame_time > 0):
-        raise ValueError("duration, h and frame_time must be positive")
-    mujoco = import_mujoco()
+    duration = as_positive(duration, "duration")
+    frame_time = as_positive(frame_time, "frame_time")
     if pose is None:
         pose = standing_pose(character)
     if pose.skeleton.n_joints != character.skeleton.n_joints:
         raise ValueError("pose: its skeleton does not match the character's")
-    comp = controller == "com" if gravity_compensation is None else bool(gravity_compensation)
-    steps = max(1, round(frame_time / h))
-    h_used = frame_time / steps
     n = max(2, round(duration / frame_time) + 1)
-    model = character.fresh_model()
-    model.opt.timestep = h_used
-    data = mujoco.MjData(model)
     target = qpos_from_motion(character, pose[:1])[0]
-    data.qpos[:] = target
-    mujoco.mj_forward(model, data)
-    push_body = push.body(character) if push is not None else -1
-    push_force = push.force_z_up() if push is not None else np.zeros(3)
-
-    feet = foot_chains(character)
-    foot_bodies = [character.bodies[c[0]] for c in feet]
-    leg_dofs = [
-        _ancestor_dofs(character, model, b) if controller == "com" else
-        np.arange(int(model.body_dofadr[b]), int(model.body_dofadr[b]) + 3)
-        for b in foot_bodies
-    ]
-    mass = float(np.sum(model.body_mass))
-    c_bar = data.subtree_com[character.bodies[0]].copy()  # z-up
-    com0_height = float(c_bar[2])
-    support = support_centre(character, pose)
-
-    out = np.empty((n, model.nq))
-    out[0] = data.qpos
-    com = np.empty((n, 3))
-    com[0] = c_bar
-    tau_log = np.zeros((n, model.nv - 6))
-    err = np.zeros(model.nv)
-    tau = np.zeros(model.nv)
-    f_weight = np.array([0.0, 0.0, mass * _GRAVITY]) if comp else np.zeros(3)
-    fall_time: float | None = None
-    last = n - 1
-    start = time.perf_counter()
-    for i in range(1, n):
-        for k in range(steps):
-            if push is not None:
-                t = ((i - 1) * steps + k) * h_used
-                data.xfrc_applied[push_body, :3] = push_force if push.active(t, h_used) else 0.0
-            mujoco.mj_step1(model, data)  # kinematics, COM and Jacobians of the current state
-            if torques:
-                mujoco.mj_differentiatePos(model, err, 1.0, data.qpos, target)
-                np.multiply(err, kp, out=tau)
-                tau -= kd * data.qvel
-                tau[:6] = 0.0
-                if controller != "none":
-                    jc = com_jacobian(character, model, data)
-                    c = data.subtree_com[character.bodies[0]]
-                    cdot = jc @ data.qvel
-                    f = com_kp * (c_bar - c) - com_kd * cdot
-                    f[2] = 0.0  # horizontal
-                    f = (f + f_weight) / len(feet)
-                    for b, dofs in zip(foot_bodies, leg_dofs, strict=True):
-                        jt = stance_com_jacobian(character, model, data, b)
-                        tau[dofs] += jt[:, dofs].T @ f
-                np.clip(tau, -torque_limit, torque_limit, out=tau)
-                data.qfrc_applied[:] = tau
-            mujoco.mj_step2(model, data)
-        mujoco.mj_kinematics(model, data)
-        mujoco.mj_comPos(model, data)
-        out[i] = data.qpos
-        com[i] = data.subtree_com[character.bodies[0]]
-        tau_log[i] = data.qfrc_applied[6:]
-        if fall_time is None and com[i, 2] < fall_fraction * com0_height:
-            fall_time = i * frame_time
-        if on_frame is not None:
-            on_frame(i, motion_from_qpos(character, out[i : i + 1], frame_time, name="stand"))
-        if fall_time is not None and stop_when_fallen:
-            last = i
-            break
-    wall = time.perf_counter() - start
-    out = out[: last + 1]
+    sim = Simulation(character, target, frame_time=frame_time, h=h,
+                     torque_limit=torque_limit, push=push,
+                     fall=Fall("com", fraction=fall_fraction, stop=stop_when_fallen),
+                     on_frame=on_frame, name="stand")
+    law: PD | None = None
+    if torques:
+        comp = controller == "com" if gravity_compensation is None else bool(gravity_compensation)
+        law = (PD(target, kp, kd) if controller == "none" else
+               BALANCE_CONTROLLERS[controller](character, target, kp=kp, kd=kd,
+                                               com_kp=com_kp, com_kd=com_kd,
+                                               gravity_compensation=comp))
+    record = sim.run(law, n)
     return BalanceResult(
-        motion=motion_from_qpos(character, out, frame_time, name="stand"),
-        fell=fall_time is not None,
-        fall_time=fall_time,
-        com=com[: last + 1] @ Y_TO_Z_MATRIX,
-        com_target=Y_TO_Z_MATRIX.T @ c_bar,
-        support=support,
-        torques=tau_log[: last + 1],
+        motion=motion_from_qpos(character, record.qpos, frame_time, name="stand"),
+        fell=record.fall_time is not None,
+        fall_time=record.fall_time,
+        com=record.com @ Y_TO_Z_MATRIX,
+        com_target=Y_TO_Z_MATRIX.T @ record.com[0],
+        support=support_centre(character, pose),
+        torques=record.torques[:, 6:],
         push=push,
         controller=controller,
-        h=h_used,
-        sim_time=last * frame_time,
-        wall_time=wall,
+        h=record.h,
+        sim_time=record.sim_time,
+        wall_time=record.wall_time,
     )
 
 
@@ -542,8 +541,12 @@ def largest_push(
 
 
 __all__ = [
+    "BALANCE_CONTROLLERS",
     "CONTROLLERS",
+    "AnkleStrategy",
     "BalanceResult",
+    "COMBalance",
+    "VirtualForce",
     "com_jacobian",
     "foot_chains",
     "largest_push",

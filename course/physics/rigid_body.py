@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._typing import Array
-from .._validate import as_array, as_time_step, unit
+from .._validate import as_array, as_positive, as_time_step, unit
 from ..rotations import _kernels
 from ..rotations.axis_angle import quat_from_rotvec
 from ..rotations.quaternion import matrix_from_quat, quat_from_matrix
@@ -69,14 +69,6 @@ Applied = Callable[["RigidState"], tuple[Array, Array]]
 
 
 # -- input -------------------------------------------------------------------------------------
-
-
-def _positive(value: float, name: str, allow_zero: bool = False) -> float:
-    a = as_array(value, name)
-    if a.ndim != 0 or not (a >= 0 if allow_zero else a > 0):
-        want = "non-negative" if allow_zero else "positive"
-        raise ValueError(f"{name}: must be a {want} number, got {value!r}")
-    return float(a)
 
 
 def _inertia(inertia: ArrayLike, name: str = "inertia") -> Array:
@@ -136,7 +128,7 @@ class RigidBody:
 
     def __post_init__(self) -> None:
         # frozen: the checked, converted values are set past the dataclass's guard
-        object.__setattr__(self, "mass", _positive(self.mass, "mass"))
+        object.__setattr__(self, "mass", as_positive(self.mass, "mass"))
         object.__setattr__(self, "inertia", _inertia(self.inertia))
         points = as_array(self.points, "points", (3,))
         if points.ndim != 2:
@@ -278,7 +270,7 @@ def kinetic_energy(mass: float, inertia: ArrayLike, v: ArrayLike, L: ArrayLike,
     -------
     (...)
     """
-    m = _positive(mass, "mass")
+    m = as_positive(mass, "mass")
     v = as_array(v, "v", (3,))
     L = as_array(L, "L", (3,))
     omega = angular_velocity(L, R, inertia)
@@ -311,9 +303,9 @@ class Ground:
     friction: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "k", _positive(self.k, "k"))
-        object.__setattr__(self, "d", _positive(self.d, "d", allow_zero=True))
-        object.__setattr__(self, "friction", _positive(self.friction, "friction",
+        object.__setattr__(self, "k", as_positive(self.k, "k"))
+        object.__setattr__(self, "d", as_positive(self.d, "d", allow_zero=True))
+        object.__setattr__(self, "friction", as_positive(self.friction, "friction",
                                                        allow_zero=True))
 
 
@@ -627,7 +619,7 @@ def box_inertia(mass: float, half_extents: ArrayLike) -> Array:
     -------
     (3, 3)
     """
-    m = _positive(mass, "mass")
+    m = as_positive(mass, "mass")
     a, b, c = _half_extents(half_extents) ** 2
     return m / 3.0 * np.diag([b + c, a + c, a + b])
 
@@ -656,7 +648,7 @@ def parallel_axis(mass: float, inertia: ArrayLike, offset: ArrayLike) -> Array:
     """Inertia about a point ``−offset`` from the centre of mass (Steiner):
     ``I₀ + m (‖d‖² E − d dᵀ)`` with ``d`` = ``offset``, (3, 3)."""
     d = as_array(offset, "offset", (3,))
-    return as_array(inertia, "inertia", (3, 3)) + _positive(mass, "mass") * (
+    return as_array(inertia, "inertia", (3, 3)) + as_positive(mass, "mass") * (
         (d @ d) * np.eye(3) - np.outer(d, d))
 
 
@@ -670,15 +662,15 @@ def t_handle(mass: float = 0.2, bar_half_length: float = 0.06, stem_length: floa
     I_z``: x, the bar's axis, is the intermediate one. The contact points are both boxes'
     corners.
     """
-    a = _positive(bar_half_length, "bar_half_length")
-    l_stem = _positive(stem_length, "stem_length")
-    t = _positive(half_thickness, "half_thickness")
+    a = as_positive(bar_half_length, "bar_half_length")
+    l_stem = as_positive(stem_length, "stem_length")
+    t = as_positive(half_thickness, "half_thickness")
     bar = np.array([a, t, t])
     stem = np.array([t, l_stem / 2, t])
     # the stem starts at the bar's top face; mass split by volume
     centres = np.array([[0.0, 0.0, 0.0], [0.0, t + l_stem / 2, 0.0]])
     volumes = np.array([np.prod(bar), np.prod(stem)])
-    masses = _positive(mass, "mass") * volumes / volumes.sum()
+    masses = as_positive(mass, "mass") * volumes / volumes.sum()
     com = masses @ centres / masses.sum()
     inertia = np.sum([parallel_axis(mi, box_inertia(mi, e), c - com)
                       for mi, e, c in zip(masses, (bar, stem), centres, strict=True)], axis=0)
@@ -700,9 +692,9 @@ def capsule_inertia(mass: float, radius: float, half_length: float) -> Array:
     -------
     (3, 3)
     """
-    m = _positive(mass, "mass")
-    r = _positive(radius, "radius")
-    H = 2.0 * _positive(half_length, "half_length", allow_zero=True)
+    m = as_positive(mass, "mass")
+    r = as_positive(radius, "radius")
+    H = 2.0 * as_positive(half_length, "half_length", allow_zero=True)
     v_cyl, v_caps = np.pi * r * r * H, 4.0 / 3.0 * np.pi * r**3
     m_c, m_s = m * v_cyl / (v_cyl + v_caps), m * v_caps / (v_cyl + v_caps)
     axial = m_c * r * r / 2 + m_s * 2 * r * r / 5

@@ -86,6 +86,9 @@ def _parts(a: Array) -> tuple[Any, ...]:
     return tuple(np.moveaxis(a, -1, 0))
 
 
+_CONJUGATE = np.array([1.0, -1.0, -1.0, -1.0])
+
+
 # --------------------------------------------------------------------------- arrays
 def quat_mul(a: Array, b: Array) -> Array:
     """Hamilton product :math:`ab` of quaternions (..., 4), broadcast over leading axes."""
@@ -102,6 +105,19 @@ def quat_between(u: Array, v: Array) -> Array:
     on arrays (the identity where either is shorter than :data:`TINY`)."""
     u, v = np.broadcast_arrays(u, v)
     return np.stack(np.broadcast_arrays(*q_between(_parts(u), _parts(v), NUMPY)), axis=-1)
+
+
+def quat_conjugate(q: Array) -> Array:
+    """:math:`q^* = (w, -x, -y, -z)` of quaternions (..., 4): the inverse of a unit one
+    (:func:`q_conjugate` on arrays)."""
+    out: Array = q * _CONJUGATE
+    return out
+
+
+def quat_from_rotvec(r: Array) -> Array:
+    r""":math:`\exp(r)` of rotation vectors (..., 3) -> (..., 4): :func:`q_from_rotvec` on
+    arrays (the identity at 0)."""
+    return np.stack(np.broadcast_arrays(*q_from_rotvec(_parts(r), NUMPY)), axis=-1)
 
 
 def quat_canonical(q: Array) -> Array:
