@@ -42,6 +42,12 @@ from course.skeleton import chain
 from course.viz import ik_playground
 view = ik_playground(chain([1.0] * 5, axes=[0, 0, 1]), methods=["dls"])
 view""", "target y"),
+    "full_body_ik": ("CMU 12_01 walk, 2 hands, fabrik (notebook 06)", """
+from course import data
+from course.viz import full_body_ik
+view = full_body_ik(data.load("cmu_12_01_walk"), 0, root="LowerBack",
+                    effectors=["LeftHandIndex1_end", "RightHandIndex1_end"], method="fabrik")
+view""", "target y"),
     "bvh_player": ("CMU 12_01 walk", """
 from course import data
 from course.viz import bvh_player

@@ -98,3 +98,29 @@ def test_bad_settings_are_named(wave, waver):
         SimulationView(waver, wave, h=0.003)
     with pytest.raises(ValueError, match="n_frames"):
         SimulationView(waver, wave, n_frames=1)
+
+
+@pytest.mark.parametrize("fps", [120.0, 30.0])
+def test_every_step_offered_divides_the_frame_and_runs(wave, waver, fps):
+    """The menu offers only steps the simulation accepts (1/300 s is 2.5 steps of a 120 fps
+    frame: refused, so not offered); each one simulates a short clip to its end."""
+    from dataclasses import replace
+
+    from course.physics.simulation import substeps
+    from course.viz.simulation_view import STEP_RANGE, steps
+
+    clip = replace(wave, frame_time=1.0 / fps)
+    offered = steps(clip.frame_time)
+    assert offered and all(STEP_RANGE[0] * 0.999 <= h <= STEP_RANGE[1] * 1.001 for h in offered)
+    assert [substeps(clip.frame_time, h) * h for h in offered] == pytest.approx(
+        [clip.frame_time] * len(offered))
+    view = SimulationView(waver, clip, n_frames=3, hold_root=True, blocking=True)
+    try:
+        assert [v for _, v in view.sliders["h"].options] == offered
+        for h in offered:  # run, not refused (a coarse step may go unstable: said so)
+            view.sliders["h"].value = h
+            assert view.error is None and view.result is not None, view.readout.value
+            assert view.result.h == pytest.approx(h)
+            assert f"(h = 1/{round(1 / h)} s)" in view.readout.value
+    finally:
+        view.close()

@@ -161,8 +161,10 @@ class FullBodyIK(Control):
         if snapped(self.sliders["xyz"[k]], old, value):
             return
         self.targets[name][k] = self.root_position[k] + value
-        self._show_target(self.targets[name])
+        self.scene.move_target_handle(self.targets[name])  # in the picture the solve draws
         self.solve()
+        if self.drag is not None:  # after the 3D picture has gone out, not before it
+            self.drag.show(self.targets[name])
 
     def _show_target(self, position: Array) -> None:
         """The drag handle or the pad's dot follows a target set otherwise."""

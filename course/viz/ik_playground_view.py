@@ -139,10 +139,10 @@ class IKPlayground(Control):
         if self._dragging or snapped(self.sliders["xyz"[k]], self._goal[k], value):
             return
         self._goal[k] = value
-        self.scene.move_target_handle(self.target)
-        if self.drag is not None:
-            self.drag.show(self.target)
+        self.scene.move_target_handle(self.target)  # in the picture the solve draws
         self.solve(plot_later=True)
+        if self.drag is not None:  # after the 3D picture has gone out, not before it
+            self.drag.show(self.target)
 
     def _dragged(self, position: Array) -> None:
         """The handle was dragged to ``position``: the sliders follow, then one solve (a

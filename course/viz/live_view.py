@@ -105,6 +105,9 @@ class LiveView:
 
     def render(self) -> None:
         """Draw the current state (and push it to the notebook view, if one is shown)."""
+        if self._image is not None:  # the static picture's capture draws: once, not twice
+            self._image.value = png_bytes(self.image())
+            return
         if not self._in_browser:  # vtk.js sets its own clipping range
             self.plotter.renderer.ResetCameraClippingRange()
         self.plotter.render()
@@ -112,8 +115,6 @@ class LiveView:
             for view in self._browser_views:
                 view.push_camera()
             self._camera_moved = False
-        if self._image is not None:
-            self._image.value = png_bytes(self.image())
 
     def image(self) -> NDArray[np.uint8]:
         """The rendered frame as an ``(H, W, 3)`` uint8 array (row 0 at the top)."""

@@ -63,12 +63,24 @@ def segments(pairs: NDArray[np.intp]) -> NDArray[np.intp]:
     return np.column_stack([np.full(len(pairs), 2), pairs]).ravel()
 
 
-def tube_actor(lines: pv.PolyData, radius: float, sides: int = 18) -> pv.Actor:
-    """An actor drawing ``lines`` as shaded tubes; the tube filter re-runs when points change."""
+#: (theta, phi) resolution of a joint's or target's sphere where VTK glyphs it on the GPU, and
+#: where it is a mesh sent to the browser (vtk.js) on every move: there a joint is 8 to 14 px
+#: across, and 12 x 8 (74 points, a vertex on each axis so its bounds are the sphere's within
+#: 3 %) shades as round as 14 x 10 (114) while a 38-joint skeleton sends, hashes and uploads
+#: 2,812 points per move instead of 4,332
+SPHERE_RESOLUTION = {"gpu": (28, 20), "browser": (12, 8)}
+#: sides of a bone's tube: where VTK draws, and in the mesh sent to the browser on every move
+TUBE_SIDES = {"gpu": 18, "browser": 12}
+
+
+def tube_actor(lines: pv.PolyData, radius: float, sides: int | None = None, *,
+               browser: bool = False) -> pv.Actor:
+    """An actor drawing ``lines`` as shaded tubes (``sides`` around, default
+    :data:`TUBE_SIDES`); the tube filter re-runs when points change."""
     tube = vtkTubeFilter()
     tube.SetInputData(lines)
     tube.SetRadius(radius)
-    tube.SetNumberOfSides(sides)
+    tube.SetNumberOfSides(sides or TUBE_SIDES["browser" if browser else "gpu"])
     tube.CappingOn()
     mapper = vtkPolyDataMapper()
     mapper.SetInputConnection(tube.GetOutputPort())
@@ -79,20 +91,24 @@ def tube_actor(lines: pv.PolyData, radius: float, sides: int = 18) -> pv.Actor:
 def sphere_actor(points: pv.PolyData, radius: float, *, browser: bool = False) -> pv.Actor:
     """Spheres at every point of ``points``: glyphed on the GPU where VTK renders; for a view
     rendered in the browser (vtk.js knows no glyph mapper) as one small mesh, re-glyphed on
-    the CPU when the points move (a few hundred points per joint)."""
+    the CPU when the points move (74 points per joint, see :data:`SPHERE_RESOLUTION`)."""
     if browser:
+        theta, phi = SPHERE_RESOLUTION["browser"]
         glyphs = vtkGlyph3D()
         glyphs.SetInputData(points)
-        glyphs.SetSourceData(pv.Sphere(radius=radius, theta_resolution=14, phi_resolution=10))
+        glyphs.SetSourceData(pv.Sphere(radius=radius, theta_resolution=theta,
+                                       phi_resolution=phi))
         glyphs.ScalingOff()
         glyphs.OrientOff()
         mapper = vtkPolyDataMapper()
         mapper.SetInputConnection(glyphs.GetOutputPort())
         mapper.ScalarVisibilityOff()
         return pv.Actor(mapper=mapper)
+    theta, phi = SPHERE_RESOLUTION["gpu"]
     glyph_mapper = vtkGlyph3DMapper()
     glyph_mapper.SetInputData(points)
-    glyph_mapper.SetSourceData(pv.Sphere(radius=radius, theta_resolution=28, phi_resolution=20))
+    glyph_mapper.SetSourceData(pv.Sphere(radius=radius, theta_resolution=theta,
+                                         phi_resolution=phi))
     glyph_mapper.ScalingOff()
     glyph_mapper.OrientOff()
     glyph_mapper.ScalarVisibilityOff()

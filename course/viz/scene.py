@@ -370,14 +370,22 @@ class SkeletonScene(LiveView):
 
     def _framed(self, view: widgets.DOMWidget) -> widgets.DOMWidget:
         """vtk.js draws no 2D actors: the legend of a view rendered in the browser is HTML
-        above it."""
+        above it.
+
+        The box of the two takes over the view's size and the view fills its width (never
+        more than its window's): a layout that narrows the box (a panel beside it, a notebook
+        beside the file browser) narrows the view with it, its aspect kept, instead of leaving
+        it at its window's width, sticking out of the box and cut by it."""
         if not (self._in_browser and len(self.legend_entries()) > 1):
             return view
         import ipywidgets as widgets
 
         self._legend = widgets.HTML(self._legend_html(), layout=widgets.Layout(height="22px"))
-        return widgets.VBox([self._legend, view], layout=widgets.Layout(
+        box = widgets.VBox([self._legend, view], layout=widgets.Layout(
             width=view.layout.width, min_width=view.layout.min_width, flex="0 1 auto"))
+        view.layout.max_width = view.layout.width
+        view.layout.width = "100%"
+        return box
 
 
 def show_skeletons(

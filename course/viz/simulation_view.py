@@ -13,6 +13,7 @@ frame as it arrives (for code and tests: no running kernel loop needed).
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -26,9 +27,24 @@ from .._typing import Array
 from .panel import Control, fixed_height, on_value, readout_box, slider_style
 from .scene import GHOST, SkeletonScene
 
-#: steps a slider offers (s): 1/1200 .. 1/60
-STEPS = (1 / 1200, 1 / 600, 1 / 300, 1 / 120, 1 / 60)
+#: sub-steps per clip frame the step menu offers, kept where the step is 1/2400 .. 1/60 s:
+#: only steps that divide the frame (the simulation refuses any other), e.g. 1/120 .. 1/2400 s
+#: for a 120 fps clip, 1/60 .. 1/1200 s for a 60 fps one
+SUBSTEPS = (1, 2, 4, 5, 10, 20)
+STEP_RANGE = (1 / 2400, 1 / 60)  # s
 WINDOW = (640, 420)  # px: the 3D view
+
+
+def steps(frame_time: float) -> list[float]:
+    """The steps (s) the menu offers for a clip of ``frame_time`` s a frame: ``frame_time / n``
+    for ``n`` in :data:`SUBSTEPS`, within :data:`STEP_RANGE`, coarsest first."""
+    lo, hi = STEP_RANGE[0] * (1 - 1e-9), STEP_RANGE[1] * (1 + 1e-9)
+    return [frame_time / n for n in SUBSTEPS if lo <= frame_time / n <= hi]
+
+
+def step_label(h: float) -> str:
+    """``h`` as a student reads it, "1/600 s" (a CMU frame of 0.008333 s makes 1/600.002)."""
+    return f"1/{1 / h:.4g} s"
 
 
 class _Stopped(Exception):
@@ -42,7 +58,9 @@ class SimulationView(Control):
     ----------
     character : :class:`~course.physics.character.Character`
     clip : :class:`~course.motion.Motion`, the clip to follow (``n_frames`` of it are run).
-    kp, kd, h : the starting gains (N m/rad, N m s/rad) and step (s, one of :data:`STEPS`).
+    kp, kd : the starting gains (N m/rad, N m s/rad).
+    h : the starting step (s), one of :func:`steps` of the clip; default the one nearest
+        1/600 s.
     push : starting push (N), applied sideways to the root for ``push_duration`` s from
         ``push_start`` s (0: none).
     hold_root, stable_pd : as in :func:`~course.physics.character.track`.
@@ -54,15 +72,22 @@ class SimulationView(Control):
     """
 
     def __init__(self, character: Any, clip: Any, *, kp: float = 1000.0, kd: float = 6.3,
-                 h: float = 1 / 600, push: float = 0.0, push_start: float = 0.3,
+                 h: float | None = None, push: float = 0.0, push_start: float = 0.3,
                  push_duration: float = 0.1, hold_root: bool = False, stable_pd: bool = False,
                  n_frames: int = 120, offset: ArrayLike | None = None,
                  torque_limit: float = float("inf"), display_fps: float = 30.0,
                  blocking: bool = False,
                  call_later: Callable[[float, Callable[[], None]], Any] | None = None) -> None:
-        if h not in STEPS:
-            raise ValueError(f"h: one of {tuple(round(1 / s) for s in STEPS)} steps a second "
-                             f"(1/1200 .. 1/60 s), got {h!r}")
+        offered = steps(clip.frame_time)
+        if not offered:
+            raise ValueError(f"clip: a frame of {clip.frame_time:.6g} s has no step of "
+                             f"1/2400 .. 1/60 s dividing it in {SUBSTEPS} sub-steps")
+        asked = 1 / 600 if h is None else h
+        step = min(offered, key=lambda s: abs(s - asked))  # the menu's own value
+        if h is not None and not math.isclose(h, step, rel_tol=1e-9):
+            raise ValueError(f"h: one of {', '.join(map(step_label, offered))} "
+                             f"(steps that divide the clip's frame of {clip.frame_time:.6g} s), "
+                             f"got {h!r}")
         if not 2 <= int(n_frames):
             raise ValueError(f"n_frames: at least 2, got {n_frames!r}")
         from .backend import call_later as kernel_call_later
@@ -92,7 +117,8 @@ class SimulationView(Control):
                                          description="kp", **slider_style(".3g")),
             "kd": widgets.FloatSlider(value=kd, min=0.0, max=100.0, step=0.1,
                                       description="kd", **slider_style(".1f")),
-            "h": widgets.Dropdown(options=[(f"1/{round(1 / s)} s", s) for s in STEPS], value=h,
+            "h": widgets.Dropdown(options=[(step_label(s), s) for s in offered],
+                                  value=step,
                                   description="h", layout=widgets.Layout(width="200px")),
             "push": widgets.FloatSlider(value=push, min=0.0, max=1000.0, step=10.0,
                                         description="push (N)", **slider_style(".0f")),
@@ -222,7 +248,7 @@ class SimulationView(Control):
         state = ("numerically unstable" if r.unstable else
                  f"fell at {r.fall_time:.2f} s" if r.fell else "stayed up")
         self.readout.value = (f"{r.sim_time:.2f} s simulated in {r.wall_time:.2f} s "
-                              f"(h = 1/{round(1 / r.h)} s): {state}; tracking error mean "
+                              f"(h = {step_label(r.h)}): {state}; tracking error mean "
                               f"{np.nanmean(r.error_cm):.1f} cm")
 
 
@@ -235,4 +261,5 @@ def simulation_view(character: Any, clip: Any, *, simulate: bool = True,
     return view
 
 
-__all__: Sequence[str] = ("STEPS", "SimulationView", "simulation_view")
+__all__: Sequence[str] = ("SUBSTEPS", "SimulationView", "simulation_view", "step_label",
+                            "steps")

@@ -56,7 +56,7 @@ class SkeletonActors:
         # in place) the solid one hides it whole, instead of the two fighting over the depth
         thin = FAINT_SIZE if opacity < 1.0 else 1.0
         joints_actor = sphere_actor(points, radius=0.022 * scale * thin, browser=browser)
-        bones_actor = tube_actor(bones, radius=0.011 * scale * thin)
+        bones_actor = tube_actor(bones, radius=0.011 * scale * thin, browser=browser)
         shade(joints_actor, joint_color, opacity=opacity)
         shade(bones_actor, bone_color, specular=0.25, opacity=opacity)
         actors = [bones_actor, joints_actor]

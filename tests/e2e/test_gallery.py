@@ -2,11 +2,15 @@
 
 Each notebook (found by glob, so new ones join by themselves) is opened in one live
 JupyterLab in headless Chromium with the default 3D view, all cells run, and for every
-interactive view at 1366x768 and again at 1920x1080:
+interactive view at 1366x768 and again at 1920x1080, each time with the notebook alone (the
+file browser collapsed) and beside JupyterLab's file browser (how Lab opens, ~250 px less
+for the notebook):
 
-- the view and its controls lie inside the output area and inside the window's width,
-- the whole output (view, sliders, readouts, plots under it) is no taller than the part of
-  the notebook the window shows, so a student sees all of it at once,
+- the view and its controls lie inside the output area and inside the window's width, and
+  no box around the view that clips (``overflow`` not visible) cuts it,
+- with the notebook alone, the whole output (view, sliders, readouts, plots under it) is no
+  taller than the part of the notebook the window shows, so a student sees all of it at
+  once (beside the file browser a view may wrap under its panel: it stays whole),
 - no visible button has zero height,
 - the picture is not blank; in a 3D view what is drawn in colour (the skeleton, its joints,
   the target, the frames' arrows) keeps clear of the view's edges and spans at least a
@@ -14,8 +18,9 @@ interactive view at 1366x768 and again at 1920x1080:
   one rendered in the kernel has shown a streamed image (trame's animated "Loading..."
   spinner changes pixels too, but is neither);
 
-then, at 1366x768, the first slider of the view is moved to both ends (Home, End) and all of
-it is checked again (every view is shot at its start at both sizes before anything moves).
+then, at 1366x768 with the notebook alone, the first slider of the view is moved to both ends
+(Home, End) and all of it is checked again (every view is shot at its start at both sizes,
+in both layouts, before anything moves).
 An interactive view is a 3D view (``.course-view``) or, in an output with a slider or a play
 button and no 3D view, its largest image: a matplotlib explorer (11's Runge and spline
 explorers), found without any class so that a new one cannot be missed. A gimbal explorer
@@ -70,6 +75,8 @@ REQUIRED = {
     "notebooks/13_rigid_bodies.ipynb": ("min (time step h", "max (time step h"),
 }
 SIZES = ((1366, 768), (1920, 1080))
+# the notebook alone, then beside the file browser (``.shell`` calls; the state a shot names)
+LAYOUTS = (("collapseLeft", ""), ("expandLeft", ", beside the file browser"))
 PARALLEL = int(os.environ.get("GALLERY_PARALLEL", "3"))
 SETTLE_S = 2.0  # after a change: the kernel answers, the browser draws
 FIT_MARGIN = 8  # px the output must leave of the notebook's visible height
@@ -105,8 +112,16 @@ GEOMETRY = """(view) => {
       + ' .widget-image, .widget-checkbox, .widget-select-multiple, .course-view')].filter(shown);
   // the part of the notebook the window shows (under the toolbar, above the status bar)
   const panel = view.closest('.jp-WindowedPanel-outer') || view.closest('.jp-Notebook');
+  // the boxes between the view and the output area that clip what sticks out of them
+  const clips = [];
+  for (let e = view.parentElement; e && e !== out.parentElement; e = e.parentElement) {
+    const style = getComputedStyle(e);
+    if (style.overflowX !== 'visible' || style.overflowY !== 'visible') {
+      clips.push({cls: e.className.toString().slice(0, 60), ...box(e)});
+    }
+  }
   return {out: box(out), view: box(view), window: window.innerWidth,
-          visible: panel ? panel.clientHeight : window.innerHeight,
+          visible: panel ? panel.clientHeight : window.innerHeight, clips,
           controls: controls.map(e => ({cls: e.className.toString().slice(0, 60), ...box(e)})),
           buttons: [...out.querySelectorAll('button')].filter(shown).map(box)};
 }"""
@@ -162,7 +177,9 @@ def _check_picture(png: bytes, kind: str) -> list[str]:
     return problems
 
 
-def _check_geometry(g: dict) -> list[str]:
+def _check_geometry(g: dict, *, seen_at_once: bool = True) -> list[str]:
+    """The view and its controls inside the output area and the window, the view cut by no
+    box around it; with ``seen_at_once``, the whole output no taller than the notebook shows."""
     problems = []
     out, tol = g["out"], 1.5
     for c in g["controls"]:
@@ -171,13 +188,21 @@ def _check_geometry(g: dict) -> list[str]:
                             f"past the window ({g['window']})")
         elif c["left"] < out["left"] - tol or c["right"] > out["right"] + tol:
             problems.append(f"{c['cls'] or 'a control'} [{c['left']:.0f}, {c['right']:.0f}] "
-                            f"leaves the output area [{out['left']:.0f}, {out['right']:.0f}]")
-    if out["height"] > g["visible"] - FIT_MARGIN:
+                            f"leaves the output area [{out['left']:.0f}, {out['right']:.0f}] "
+                            f"by {max(out['left'] - c['left'], c['right'] - out['right']):.0f} px")
+    v = g["view"]
+    for c in g["clips"]:
+        if (v["left"] < c["left"] - tol or v["right"] > c["right"] + tol
+                or v["top"] < c["top"] - tol or v["bottom"] > c["bottom"] + tol):
+            problems.append(f"the view [{v['left']:.0f}, {v['right']:.0f}] x [{v['top']:.0f}, "
+                            f"{v['bottom']:.0f}] is cut by its container {c['cls'] or '(a box)'} "
+                            f"[{c['left']:.0f}, {c['right']:.0f}] x [{c['top']:.0f}, "
+                            f"{c['bottom']:.0f}]")
+    if seen_at_once and out["height"] > g["visible"] - FIT_MARGIN:
         problems.append(f"the output is {out['height']:.0f} px tall, the notebook shows "
                         f"{g['visible']} px: it cannot be seen at once")
     if any(b["height"] < 1 for b in g["buttons"]):
         problems.append("a button has zero height")
-    v = g["view"]
     if v["width"] < 50 or v["height"] < 50:
         problems.append(f"the view is {v['width']:.0f}x{v['height']:.0f} px")
     return problems
@@ -230,7 +255,7 @@ async def _live_problems(view) -> list[str]:
 
 
 async def _shoot(page, view, shots: list[Shot], notebook: str, size, k: int,
-                 state: str, kind: str) -> None:
+                 state: str, kind: str, *, seen_at_once: bool = True) -> None:
     await view.scroll_into_view_if_needed()
     problems = []
     if state == "start":
@@ -239,7 +264,7 @@ async def _shoot(page, view, shots: list[Shot], notebook: str, size, k: int,
     slug = re.sub(r"[^A-Za-z0-9=]+", "_", state).strip("_")
     name = f"{notebook.replace('/', '_').removesuffix('.ipynb')}_{size[0]}_v{k}_{slug}.png"
     await _output(view).screenshot(path=str(ARTIFACTS / name))
-    problems += _check_geometry(await view.evaluate(GEOMETRY))
+    problems += _check_geometry(await view.evaluate(GEOMETRY), seen_at_once=seen_at_once)
     problems += _check_picture(await view.screenshot(), kind)
     shots.append(Shot(notebook, size, k, state, name, problems))
 
@@ -310,16 +335,29 @@ async def _gimbal_lock(page, view, shots: list[Shot], notebook: str, size, k: in
     await _wait_settled(page, 1.0)
 
 
+async def _layout(page, shell_call: str) -> None:
+    """The notebook alone (``collapseLeft``) or beside the file browser (``expandLeft``);
+    the views settle into their new width (a vtk.js view draws again at its new size)."""
+    await page.evaluate(f"() => window.jupyterapp.shell.{shell_call}?.()")
+    await asyncio.sleep(1.5)
+
+
 async def _shoot_views(page, kinds: list[str], shots: list[Shot], notebook: str) -> None:
-    """Every view at its start at every size first, before anything moves (a start typed
-    back into a slider is only as exact as its readout: a re-solve, other numbers); then the
-    moves: Y = 90 at every size, the slider's ends at the small one, where space is tight."""
+    """Every view at its start at every size and in both layouts first, before anything
+    moves (a start typed back into a slider is only as exact as its readout: a re-solve,
+    other numbers); then the moves, with the notebook alone: Y = 90 at every size, the
+    slider's ends at the small one, where space is tight."""
     for size in SIZES:
         await page.set_viewport_size({"width": size[0], "height": size[1]})
         await asyncio.sleep(1.0)
-        for k, kind in enumerate(kinds):
-            view = page.locator(f"[data-gallery-view='{k}']")
-            await _shoot(page, view, shots, notebook, size, k, "start", kind)
+        for shell_call, where in LAYOUTS:
+            await _layout(page, shell_call)
+            for k, kind in enumerate(kinds):
+                view = page.locator(f"[data-gallery-view='{k}']")
+                # beside the file browser a view may wrap under its panel: whole, not at once
+                await _shoot(page, view, shots, notebook, size, k, "start" + where, kind,
+                             seen_at_once=not where)
+        await _layout(page, LAYOUTS[0][0])
     for size in reversed(SIZES):
         await page.set_viewport_size({"width": size[0], "height": size[1]})
         await asyncio.sleep(1.0)
@@ -434,8 +472,9 @@ def _write_gallery(results: dict[str, list[Shot]]) -> Path:
             "<h1>The live views, as a student sees them</h1>"
             f"<p>{len(results)} notebooks, window sizes "
             f"{', '.join(f'{w}x{h}' for w, h in SIZES)}; each view at its start (both sizes, "
-            f"before anything moves), and with its first slider at both ends ({SIZES[0][0]} "
-            "only).</p>" + "".join(rows))
+            "the notebook alone and beside the file browser, before anything moves), and "
+            f"with its first slider at both ends ({SIZES[0][0]}, the notebook alone).</p>"
+            + "".join(rows))
     path = ARTIFACTS / "gallery.html"
     path.write_text(page)
     return path
