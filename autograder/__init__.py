@@ -13,13 +13,15 @@ Student code runs only in a separate, limited interpreter (:mod:`autograder.sand
 comparisons and scores are computed here. An assignment is a spec module plus data
 (:mod:`autograder.spec`, :mod:`autograder.assignments`).
 
-Layers, lowest first: the judging core (:mod:`~autograder.judging` with the specs, checks,
-mistake catalogue, wire values, limits and :mod:`~autograder.results`), which starts no
-process and which :mod:`course.exercises` uses in the student's own kernel; the grading run
-(sandbox, runner); the views of a result (:mod:`~autograder.findings`, the report, figures,
-Gradescope's feedback, the class summary, the LMS exports), which import the results and never
-the reverse; the batch (:mod:`~autograder.batch`, grading, cluster, Gradescope's runner) and
-the command line on top. This package loads only the core until :func:`check` runs.
+Layers, lowest first: the judging core (:mod:`~autograder.judging`, whose one loop over a
+test's cases runs on any executor, with the specs, checks, mistake catalogue, wire values,
+limits, :mod:`~autograder.results` and :mod:`~autograder.findings`, the one record of what a
+result says), which starts no process and which :mod:`course.exercises` uses in the
+student's own kernel; the grading run (sandbox, runner); the views of a result (the report,
+figures, Gradescope's feedback, the class summary, the LMS exports), which render its
+findings and are never imported back; the batch (:mod:`~autograder.batch`, grading, cluster,
+Gradescope's runner) and the command line on top. This package loads only the core until
+:func:`check` runs.
 """
 
 from __future__ import annotations
@@ -59,7 +61,7 @@ def check(assignment: str, submission: str | Path | None = None, *, seed: str | 
     from .assignments import load
     from .report import Report
     from .runner import default_submission, run, seed_from_env
-    from .submission import printable
+    from .safe_text import printable
 
     spec = load(assignment)
     path = Path(submission) if submission is not None else default_submission(spec)

@@ -12,13 +12,14 @@ from pathlib import Path
 from typing import Any
 
 from .assignments import KEYS, load
+from .findings import Findings
 from .grading import collect, grade
 from .lms import FILES as LMS_FILES
 from .report import NOT_GRADED, text
 from .runner import default_submission, read_seed, run, seed_from_env
+from .safe_text import printable
 from .sandbox import FLOOR, LEVELS, Isolation, level_for, weaker_warning
 from .spec import Assignment
-from .submission import printable
 
 NOT_GRADED_EXIT = 3  # grade's exit status when a submission could not be graded
 
@@ -130,7 +131,7 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace, spec: Assi
         parser.error(f"submission: {printable(path)} is a folder: give a .py or .ipynb "
                      "file")
     result = run(spec, path, seed, level=level)
-    print(text(result))
+    print(text(Findings.of(result)))
     if level.rank > FLOOR.rank:  # a laptop: fine for one's own work, not for a class
         print(f"(Checked at isolation {level}: fine for your own code; a class is graded "
               f"at {FLOOR} or stronger.)", file=sys.stderr)

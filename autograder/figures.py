@@ -20,7 +20,7 @@ import numpy as np
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from .results import CaseResult, Result, TestResult
+    from .findings import Failure, Findings, TestFindings
     from .spec import Picture
 
 AXIS_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
@@ -28,11 +28,11 @@ YOURS, EXPECTED, START = "#e8710a", "#1f6fd1", "#b8c0c8"
 MARKERS = ("#cf222e", "#8250df", "#1a7f37", "#6e7781")
 
 
-def first_failure_png(result: Result) -> tuple[str, str] | None:
+def first_failure_png(f: Findings) -> tuple[str, str] | None:
     """(caption, base64 PNG) of the first failing case that can be pictured, if any."""
-    for t in result.tests:
-        for c in t.cases:
-            if c.passed or c.got is None:
+    for t in f.tests:
+        for c in t.failures:
+            if c.got is None:
                 continue
             drawn = _draw(t, c)
             if drawn:
@@ -40,9 +40,9 @@ def first_failure_png(result: Result) -> tuple[str, str] | None:
     return None
 
 
-def _draw(t: TestResult, c: CaseResult) -> tuple[str, str] | None:
-    fn = t.function
-    where = f"{t.test.name}, {c.case.label}"
+def _draw(t: TestFindings, c: Failure) -> tuple[str, str] | None:
+    fn = t.spec
+    where = f"{t.name}, {c.case.label}"
     if fn.picture is not None:
         try:
             with np.errstate(all="ignore"):

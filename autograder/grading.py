@@ -44,9 +44,10 @@ from .records import Job, Submission, grader_failed, not_run
 from .report import NOT_GRADED
 from .results import Result
 from .runner import run
+from .safe_text import printable
 from .sandbox import FLOOR, level_for
 from .spec import Assignment
-from .submission import SubmissionError, printable, read_regular
+from .submission import SubmissionError, read_regular
 
 MAX_LISTED = 100_000  # entries of a folder of submissions
 MAX_NAME_BYTES = 200  # of a name, as UTF-8; with "-N" it stays a valid file name everywhere

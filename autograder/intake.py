@@ -26,7 +26,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from .submission import SubmissionError, printable, read_regular
+from .safe_text import printable
+from .submission import SubmissionError, read_regular
 
 SUFFIXES = (".py", ".ipynb")
 MAX_DEPTH = 32  # folder levels searched inside a student's folder

@@ -1,5 +1,6 @@
 """The time and memory a submission may use: set by whoever grades, enforced by the sandbox
-(:mod:`autograder.sandbox`), and kept by the notebooks' own checks for their calls' time.
+(:mod:`autograder.sandbox`), and kept by the notebooks' own checks for their calls' time;
+and what a report says of the limits an isolation level leaves out.
 
 Plain data, so that reading a limit loads no sandbox."""
 
@@ -32,3 +33,16 @@ class Limits:
 
 
 DEFAULT_LIMITS = Limits()
+
+
+#: What a report says of each isolation level (:class:`autograder.sandbox.Isolation`, by its
+#: name: a :class:`~autograder.results.Result` holds the name): "" where every limit holds.
+ISOLATION_NOTES: dict[str, str] = {
+    "bubblewrap": "",
+    "chroot": "",
+    "plain": "(No Linux namespaces here: the sandbox still limits time, memory, files "
+             "and imports, with its audit hook alone.)",
+    "portable": "(Weaker isolation on this system: the sandbox's audit hook alone keeps "
+                "files, imports, sockets and processes out of reach, and each case "
+                "still has its time limit, but memory and CPU time are not limited.)",
+}

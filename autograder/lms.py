@@ -29,9 +29,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .findings import bounded
 from .output import write_csv
-from .submission import SubmissionError, printable, read_regular
+from .safe_text import bounded, printable
+from .submission import SubmissionError, read_regular
 
 if TYPE_CHECKING:
     from .records import Submission

@@ -10,8 +10,7 @@ import stat
 from pathlib import Path
 from typing import Any, TextIO
 
-from .findings import MAX_FIELD, bounded
-from .submission import printable
+from .safe_text import MAX_FIELD, bounded, printable
 
 FORMULA = ("=", "+", "-", "@", "\t", "\r")  # what starts a formula in a spreadsheet (OWASP)
 # O_NOFOLLOW: a link planted where a result goes is not written through; O_NONBLOCK: a FIFO

@@ -72,7 +72,7 @@ import numpy as np
 
 from . import jail, runtime, seccomp
 from .judging import Outcome
-from .limits import Limits
+from .limits import ISOLATION_NOTES, Limits
 from .protocol import (
     MAX_FRAME,
     ProtocolError,
@@ -83,7 +83,7 @@ from .protocol import (
     read_frame,
     write_frame,
 )
-from .submission import printable
+from .safe_text import printable
 
 FATAL = ("timeout", "crash", "garbage")
 INSIDE = "/sandbox"  # where the runtime, the child's files and the working directory appear
@@ -121,7 +121,7 @@ class Isolation(str, enum.Enum):
     @property
     def note(self) -> str:
         """What a report says of this level ("" for the strongest)."""
-        return ISOLATION_NOTES[self]
+        return ISOLATION_NOTES[self.value]
 
 
 LEVELS = tuple(level.value for level in Isolation)
@@ -132,16 +132,6 @@ FLOOR = Isolation.CHROOT
 # user namespace with bubblewrap, per leased user at the chroot level).
 TASKS = {Isolation.BUBBLEWRAP: 32, Isolation.CHROOT: 32}
 START_ATTEMPTS = 3  # starts of one child that bubblewrap itself may refuse before we give up
-# Keyed by the levels, looked up by them or by their names (a Result holds the name).
-ISOLATION_NOTES: dict[str, str] = {
-    Isolation.BUBBLEWRAP: "",
-    Isolation.CHROOT: "",
-    Isolation.PLAIN: "(No Linux namespaces here: the sandbox still limits time, memory, files "
-                     "and imports, with its audit hook alone.)",
-    Isolation.PORTABLE: "(Weaker isolation on this system: the sandbox's audit hook alone keeps "
-                        "files, imports, sockets and processes out of reach, and each case "
-                        "still has its time limit, but memory and CPU time are not limited.)",
-}
 
 
 class Unavailable(Exception):

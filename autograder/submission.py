@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .child import ALLOWED_STDLIB
+from .safe_text import printable
 
 # Imported by notebooks to show things, never needed by the functions themselves.
 DISPLAY_MODULES = frozenset({"matplotlib", "IPython", "ipywidgets", "pyvista", "autograder",
@@ -83,21 +84,6 @@ JSON_TYPES = {dict: "an object", list: "a list", str: "a string", int: "a number
 
 class SubmissionError(ValueError):
     """The submission cannot be read (not UTF-8, not a notebook, ...)."""
-
-
-def printable(text: str | os.PathLike[str]) -> str:
-    """A file name or path as it can be shown and written anywhere: bytes that are not UTF-8
-    as ``\\xe9``, control and invisible characters escaped (``\\n``, ``\\x1b``,
-    ``\\u202e``)."""
-    s = os.fsdecode(text)
-    out = []
-    for ch in s:
-        code = ord(ch)
-        if 0xDC80 <= code <= 0xDCFF:  # a byte that was not UTF-8 (os.fsdecode's surrogateescape)
-            out.append(f"\\x{code - 0xDC00:02x}")
-        else:
-            out.append(ch if ch.isprintable() else repr(ch)[1:-1])
-    return "".join(out)
 
 
 def _kind(mode: int) -> str:

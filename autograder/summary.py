@@ -8,8 +8,9 @@ with matplotlib on the Agg canvas and embedded as PNG, so the page is one self-c
 file; every string that may come from a student (names, reasons, examples) is escaped and
 bounded.
 
-The summary is built from :func:`facts`, plain data that the batch keeps per submission
-(and a cluster's worker sends back), so a resumed batch summarises the whole class.
+The summary is built from :func:`facts`, plain data rendered from each submission's
+:class:`~autograder.findings.Findings` that the batch keeps per submission (and a cluster's
+worker sends back), so a resumed batch summarises the whole class.
 """
 
 from __future__ import annotations
@@ -19,10 +20,10 @@ from collections import Counter
 from typing import TYPE_CHECKING, Any
 
 from .figures import figure, png
-from .findings import bounded, describe_args, scored
+from .safe_text import bounded, one_line
 
 if TYPE_CHECKING:
-    from .results import Result, TestResult
+    from .findings import Findings, TestFindings
     from .spec import Assignment
 
 MAX_EXAMPLE = 300  # characters of a mistake's example
@@ -31,32 +32,32 @@ TOP = 10  # mistakes listed
 HIDDEN = "<student>"  # what an example says in place of the student's name or file
 
 
-def facts(name: str, result: Result) -> dict[str, Any]:
+def facts(name: str, f: Findings) -> dict[str, Any]:
     """What the summary needs of one graded submission, as plain data."""
-    own = {name, result.submission.name, result.submission.stem, str(result.submission)}
+    own = {name, f.path.name, f.path.stem, str(f.path)}
     mistakes: dict[str, dict[str, str]] = {}  # each once, as the first test showing it has it
-    for t in scored(result):
-        if t.misconception:
-            key = f"{t.test.function}:{t.misconception.key}"
-            mistakes.setdefault(key, {"key": key, "title": t.misconception.title,
-                                      "test": t.test.name, "example": _example(t, own)})
+    for t in f.scored:
+        if t.mistake:
+            key = f"{t.function}:{t.mistake.key}"
+            mistakes.setdefault(key, {"key": key, "title": t.mistake.title,
+                                      "test": t.name, "example": _example(t, own)})
     return {
         "name": name,
-        "score": round(result.score, 4),
-        "max_score": result.max_score,
-        "refused": bounded(" ".join("; ".join(result.problems).split()), MAX_REASON),
-        "not_graded": bounded(" ".join(result.not_graded.split()), MAX_REASON),
-        "tests": {t.test.name: t.status for t in scored(result)},
+        "score": round(f.score, 4),
+        "max_score": f.max_score,
+        "refused": one_line(f.refused, MAX_REASON),
+        "not_graded": one_line(f.not_graded, MAX_REASON),
+        "tests": {t.name: t.status for t in f.scored},
         "mistakes": list(mistakes.values()),
     }
 
 
-def _example(t: TestResult, own: set[str]) -> str:
+def _example(t: TestFindings, own: set[str]) -> str:
     """The test's first failing case, in one bounded line without the strings in ``own``."""
-    first = t.first_failure
+    first = t.first
     if first is None:
         return ""
-    text = f"{t.function.name}({describe_args(t.function, first.case)}): {first.reason}"
+    text = f"{t.call}: {first.reason}"
     for s in sorted(own, key=len, reverse=True):
         if len(s) >= 3:  # a shorter name would blot out numbers and words
             text = text.replace(s, HIDDEN)

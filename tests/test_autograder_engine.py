@@ -14,6 +14,7 @@ from autograder import Limits, check
 from autograder.assignments import load
 from autograder.checks import MatrixCheck, QuatCheck, TupleCheck
 from autograder.cli import main
+from autograder.findings import Findings
 from autograder.gradescope_json import results_json
 from autograder.protocol import (
     ProtocolError,
@@ -143,7 +144,7 @@ def test_gradescope_json_hides_hidden_tests_until_published(tmp_path):
                                                      ).read_text()
     (tmp_path / "s.py").write_text(src)
     result = check("a1", tmp_path / "s.py", seed="k", limits=LIMITS)
-    data = results_json(result, "Graded s.py.")
+    data = results_json(Findings.of(result), "Graded s.py.")
     assert data["stdout_visibility"] == "hidden" and data["execution_time"] >= 0
     assert {t["visibility"] for t in data["tests"] if "hidden" in t["name"]} == {"after_published"}
     mul = [t for t in data["tests"] if t["name"].startswith("quat_mul")]
@@ -157,6 +158,63 @@ def test_html_report_pictures_the_first_failing_rotation(tmp_path):
     (tmp_path / "s.py").write_text(src)
     page = check("a1", tmp_path / "s.py", limits=LIMITS)._repr_html_()
     assert "data:image/png;base64," in page and "extrinsic instead of intrinsic" in page
+
+
+class InProcess:
+    """An executor of the judging core's loop that calls a module's functions here, their
+    answers through the wire's encoding (as a notebook's check does, in the student's
+    kernel)."""
+
+    memory_mb = None
+
+    def __init__(self, namespace):
+        self.namespace, self.missing, self.deadline = namespace, [], float("inf")
+
+    def call(self, fn, cases, sizes=None):
+        from autograder.judging import Outcome
+
+        return [Outcome("ok", value=decode_value(encode_value(self.namespace[fn](*a))))
+                for a in cases]
+
+
+@pytest.mark.parametrize("mutant", ["mutant_mul_reversed.py", "mutant_axis_xyzw.py"])
+def test_one_loop_judges_alike_in_the_sandbox_and_in_process(mutant, tmp_path):
+    """The case loop is the judging core's (judging.run_test), whatever calls the functions:
+    in process it finds what the sandboxed grader finds, and the record says it alike."""
+    from autograder.findings import TestFindings
+    from autograder.judging import prepare, run_test
+    from autograder.results import TestResult
+
+    src = (FIXTURES / "reference.py").read_text() + "\n\n" + (FIXTURES / mutant).read_text()
+    (tmp_path / "s.py").write_text(src)
+    graded = Findings.of(check("a1", tmp_path / "s.py", seed="k", limits=LIMITS))
+    namespace: dict = {}
+    exec(compile(src, "s.py", "exec"), namespace)
+    here = []
+    for p in prepare(A1, "k"):
+        tr = TestResult(p.test, A1.function(p.test.function))
+        run_test(A1, p, tr, InProcess(namespace), lambda line: f"line {line}")
+        here.append(TestFindings.of(tr))
+    assert [(t.name, t.status, t.passed, t.mistake, t.lines) for t in here] == [
+        (t.name, t.status, t.passed, t.mistake, t.lines) for t in graded.tests]
+    assert any(t.mistake for t in here)
+
+
+def test_the_record_is_built_once_and_frozen(tmp_path):
+    import dataclasses
+
+    src = (FIXTURES / "reference.py").read_text() + (FIXTURES / "mutant_mul_reversed.py"
+                                                     ).read_text()
+    (tmp_path / "s.py").write_text(src)
+    report = check("a1", tmp_path / "s.py", limits=LIMITS)
+    found = report.findings
+    assert found is report.findings  # built on first use, then kept
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        found.score = 24
+    mul = next(t for t in found.tests if t.name.startswith("quat_mul"))
+    assert mul.mistake.key == "reversed" and mul.first is mul.failures[0]
+    assert mul.call.startswith("quat_mul(a = ") and mul.lines[-2] == f"  {mul.call}"
+    assert str(report).startswith("\n".join(found.header))
 
 
 def test_grade_a_class_in_parallel(tmp_path, capsys):

@@ -18,10 +18,10 @@ from test_autograder_fixtures import FIXTURES, REPO
 
 from autograder.assignments import load
 from autograder.cli import main
-from autograder.findings import MAX_LINE
 from autograder.grading import Submission, collect, grade, safe_name, unique
 from autograder.intake import MAX_DEPTH
 from autograder.output import csv_cell
+from autograder.safe_text import MAX_LINE
 from autograder.sandbox import Outcome, Sandbox
 from autograder.submission import SubmissionError, import_problems, source_from_notebook
 

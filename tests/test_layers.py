@@ -293,12 +293,12 @@ def reach(graph: dict[str, list[Import]], start: str) -> set[str]:
     return seen - {start}
 
 
-VIEWS = {"autograder.findings", "autograder.report", "autograder.figures", "autograder.summary",
+VIEWS = {"autograder.report", "autograder.figures", "autograder.summary",
          "autograder.gradescope_json", "autograder.lms", "autograder.output",
          "autograder.batch"}
 JUDGING_CORE = {"autograder.judging", "autograder.results", "autograder.spec",
                 "autograder.checks", "autograder.catalogue", "autograder.protocol",
-                "autograder.limits"}
+                "autograder.limits", "autograder.findings", "autograder.safe_text"}
 
 
 def test_results_and_records_are_data_below_every_view() -> None:

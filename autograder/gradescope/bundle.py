@@ -18,7 +18,8 @@ from importlib.metadata import version
 from pathlib import Path
 
 from ..assignments import KEYS, load
-from ..submission import printable, read_regular
+from ..safe_text import printable
+from ..submission import read_regular
 
 HERE = Path(__file__).resolve().parent
 PACKAGE = HERE.parent  # autograder/

@@ -30,15 +30,17 @@ from typing import Any
 
 from .. import intake
 from ..assignments import load
+from ..findings import Findings
 from ..gradescope_json import results_json
 from ..gradescope_schema import problems
 from ..judging import prepare
 from ..output import create
 from ..records import not_run
 from ..runner import run
+from ..safe_text import printable
 from ..sandbox import FLOOR, Isolation, level_for, weaker_warning
 from ..spec import Assignment
-from ..submission import printable, read_regular
+from ..submission import read_regular
 
 SOURCE = Path(__file__).resolve().parents[2]  # the bundle's root: $AUTOGRADER_ROOT/source
 CONFIG = "bundle.env"  # ASSIGNMENT=a1, PYTHON_VERSION=3.11, NUMPY_VERSION=2.4.6
@@ -96,7 +98,7 @@ def grade(root: Path) -> dict[str, Any]:
         graded = "Nothing was graded."
     else:
         result = run(spec, path, seed, level=level)
-    results = results_json(result, graded, {"submission_id": metadata.get("id")})
+    results = results_json(Findings.of(result), graded, {"submission_id": metadata.get("id")})
     wrong = problems(results)
     if wrong:
         raise RuntimeError("results.json does not follow Gradescope's format: "

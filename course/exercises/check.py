@@ -4,11 +4,14 @@ An exercise (:class:`~course.exercises.spec.Exercise`) is an autograder
 :class:`~autograder.spec.Function` (its parameters, reference and
 :class:`~autograder.checks.Check`), a generator of visible cases, its own known mistakes and
 two hints. A notebook's exercises form one :class:`~autograder.spec.Assignment`, so the
-expected answers come from :func:`autograder.judging.prepare`, each call is judged by
-:func:`autograder.judging.judge` and a failing exercise is diagnosed by
-:func:`autograder.judging.diagnose` against its own mistakes and the shared catalogue
-(:mod:`autograder.catalogue`). No sandbox, no process: the code is the student's, run by the
-student, and none of the autograder's grading run (sandbox, runner, batch) is loaded.
+expected answers come from :func:`autograder.judging.prepare`, and the exercise is run by the
+grader's own loop over a test's cases, :func:`autograder.judging.run_test`, with the
+student's kernel as its executor (:class:`_Kernel`) where the grader has its sandbox: each
+call judged and a failing exercise diagnosed against its own mistakes and the shared
+catalogue (:mod:`autograder.catalogue`) exactly as the grader would. The feedback is
+rendered from the test's :class:`~autograder.findings.TestFindings`, the record the grader's
+reports render too. No sandbox, no process: the code is the student's, run by the student,
+and none of the autograder's grading run (sandbox, runner, batch) is loaded.
 """
 
 from __future__ import annotations
@@ -19,9 +22,10 @@ import ctypes
 import html
 import inspect
 import io
+import math
 import textwrap
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection
 from contextlib import redirect_stdout
 from dataclasses import dataclass, replace
 from functools import cache
@@ -33,8 +37,9 @@ from .hints import hint
 from .registry import exercise, exercises
 
 if TYPE_CHECKING:  # the autograder's judging core loads on the first check, not with the notebook
-    from autograder.results import CaseResult
-    from autograder.spec import Assignment, Case, Function, Misconception
+    from autograder.findings import TestFindings
+    from autograder.judging import Outcome
+    from autograder.spec import Assignment
 
 _NOT_YET = "… {key}: not yet — write the body, then run this again"
 _PRINTED_CHARS = 4000  # of what the student's function prints, shown below the check
@@ -111,7 +116,9 @@ def check(key: str, student: Callable[..., Any]) -> Feedback:
     TypeError, UnknownExercise
         If ``key`` is not a string, or names no exercise (the message lists them).
     """
-    from autograder.judging import diagnose, judge, prepare
+    from autograder.findings import TestFindings
+    from autograder.judging import prepare, run_test
+    from autograder.results import TestResult
 
     ex = exercise(key)
     if not callable(student):
@@ -122,19 +129,53 @@ def check(key: str, student: Callable[..., Any]) -> Feedback:
     notebook = key.partition(".")[0]
     assignment = _assignment(notebook)
     prepared = next(p for p in prepare(assignment, None) if p.test.name == ex.key)
-    named = replace(ex.function, name=getattr(student, "__name__", ex.function.name))
-    results = [judge(named, case, expected, out, None, _nowhere,
-                     assignment.misconceptions_of(ex.function.name))
-               for case, expected, out in zip(prepared.cases, prepared.expected,
-                                              _calls(student, prepared.cases), strict=True)]
-    if all(r.kind == "not_implemented" for r in results):
+    # the messages name the function as the student did
+    tried = TestResult(prepared.test, replace(ex.function, name=getattr(
+        student, "__name__", ex.function.name)))
+    others = {f.name for f in assignment.functions} - {ex.function.name}
+    run_test(assignment, prepared, tried, _Kernel({ex.function.name: student}, others),
+             _nowhere)
+    return _feedback(key, TestFindings.of(tried))
+
+
+def _feedback(key: str, t: TestFindings) -> Feedback:
+    """What the exercise's test found, as the cell says it."""
+    if t.status == "not_implemented":
         return Feedback(key, "not_yet", _NOT_YET.format(key=key))
-    failing = [r for r in results if not r.passed]
-    if not failing:
-        return Feedback(key, "pass", f"✓ {key}: all {len(results)} cases pass")
-    first = next((r for r in failing if r.kind == "timeout"), failing[0])  # the urgent one
-    return Feedback(key, "fail", _failure_text(key, ex.function, results, first,
-                                               diagnose(assignment, ex.function, results)))
+    first = next((f for f in t.failures if f.kind == "timeout"), t.first)  # the urgent one
+    if first is None:
+        return Feedback(key, "pass", f"✓ {key}: all {t.cases} cases pass")
+    from autograder.checks import show
+
+    inputs = "\n".join(f"    {name} = {show(a) if not isinstance(a, str) else repr(a)}"
+                       for name, a in zip(t.spec.params, first.case.args, strict=True))
+    lines = [f"✗ {key}: {t.passed} of {t.cases} cases pass",
+             f"  first failing case: {first.case.label}", inputs, f"  {first.reason}"]
+    if t.mistake is not None:
+        lines += [f"  This looks like {t.mistake.title}:",
+                  textwrap.fill(t.mistake.explanation, 92, initial_indent="    ",
+                                subsequent_indent="    ")]
+    return Feedback(key, "fail", "\n".join(lines))
+
+
+class _Kernel:
+    """The student's own kernel as the executor of the judging core's loop
+    (:class:`autograder.judging.Executor`), where the grader has its sandbox: ``functions``
+    by the assignment's names, called here, in this thread (:func:`_calls`); ``missing``,
+    the notebook's other functions (a check is given one). Each call has the grader's time
+    for a case and no memory limit; a rollout's ``deadline`` is kept, not enforced here (its
+    steps are paced between calls)."""
+
+    memory_mb: int | None = None
+
+    def __init__(self, functions: dict[str, Callable[..., Any]], missing: Collection[str]):
+        self.functions = functions
+        self.missing = missing
+        self.deadline = math.inf
+
+    def call(self, fn: str, cases: list[tuple[Any, ...]],
+             sizes: list[int] | None = None) -> list[Outcome]:
+        return _calls(self.functions[fn], cases)
 
 
 def _nowhere(line: int) -> str:
@@ -152,20 +193,20 @@ def _where(exc: BaseException, student: Callable[..., Any]) -> dict[str, Any] | 
     return {"line": frames[-1].lineno, "code": frames[-1].line or ""} if frames else None
 
 
-def _calls(student: Callable[..., Any], cases: Sequence[Case]) -> list[Any]:
-    """The student's function on each case, as :func:`_call` outcomes, with what it prints
-    captured and shown afterwards, cut to :data:`_PRINTED_CHARS` (a print in a loop can
-    write megabytes, more than a notebook cell can show). After a case that runs out of
-    time the rest are skipped: each could take as long again."""
+def _calls(student: Callable[..., Any], cases: list[tuple[Any, ...]]) -> list[Outcome]:
+    """The student's function on each argument tuple, as :func:`_call` outcomes, with what
+    it prints captured and shown afterwards, cut to :data:`_PRINTED_CHARS` (a print in a
+    loop can write megabytes, more than a notebook cell can show). After a case that runs
+    out of time the rest are skipped: each could take as long again."""
     from autograder.judging import Outcome
     from autograder.limits import Limits
 
     limit = Limits().case_timeout  # the grader's limit: what is too slow here is too slow there
     printed = _Printed(_PRINTED_CHARS)
-    outcomes: list[Any] = []
+    outcomes: list[Outcome] = []
     with redirect_stdout(printed):
-        for case in cases:
-            outcomes.append(_call(student, case.args, limit))
+        for args in cases:
+            outcomes.append(_call(student, args, limit))
             if outcomes[-1].status == "timeout":
                 break
     printed.show()
@@ -173,7 +214,7 @@ def _calls(student: Callable[..., Any], cases: Sequence[Case]) -> list[Any]:
     return outcomes + [skipped] * (len(cases) - len(outcomes))
 
 
-def _call(student: Callable[..., Any], args: tuple[Any, ...], limit: float) -> Any:
+def _call(student: Callable[..., Any], args: tuple[Any, ...], limit: float) -> Outcome:
     """The call as the grader's :class:`~autograder.judging.Outcome`: the returned value
     through the sandbox's own encoding (so it is validated the same way), the error, or a
     ``timeout`` if it took longer than ``limit`` seconds."""
@@ -289,22 +330,6 @@ class _Printed(io.TextIOBase):
         if self.dropped:
             print(f"\n… and {self.dropped:,} more characters printed by your function, "
                   "not shown")
-
-
-def _failure_text(key: str, fn: Function, results: list[CaseResult], first: CaseResult,
-                  mistake: Misconception | None) -> str:
-    from autograder.checks import show
-
-    n_pass = sum(r.passed for r in results)
-    inputs = "\n".join(f"    {name} = {show(a) if not isinstance(a, str) else repr(a)}"
-                       for name, a in zip(fn.params, first.case.args, strict=True))
-    lines = [f"✗ {key}: {n_pass} of {len(results)} cases pass",
-             f"  first failing case: {first.case.label}", inputs, f"  {first.reason}"]
-    if mistake is not None:
-        lines += [f"  This looks like {mistake.title}:",
-                  textwrap.fill(mistake.explanation, 92, initial_indent="    ",
-                                subsequent_indent="    ")]
-    return "\n".join(lines)
 
 
 def _unwritten(fn: Callable[..., Any]) -> bool:
