@@ -31,11 +31,29 @@ Both are compositions of one simulation loop and a controller that supplies only
     from course.physics import PD, Simulation
     sim = Simulation(character, qpos, frame_time=1 / 60, h=1 / 600)
     record = sim.run(PD(qpos, kp=1000, kd=5), n_frames=61)
+
+Lecture 11 (``docs/walking_control.md``): the linear inverted pendulum and the capture point
+(numpy only), the ZMP against the support polygon, SIMBICON walking and stepping to recover
+(the last three lazily, with the MuJoCo wing)::
+
+    from course.physics import capture_point, natural_frequency, stand_and_step, walk
+    run = walk(character, duration=20.0)              # run.strides, run.footsteps, run.fell
+    xi = capture_point(com_xz, com_velocity_xz, natural_frequency(com_height))
 """
 
 from typing import Any
 
 from .cloth import BEND, SHEAR, STRUCTURAL, Cloth, grid_cloth
+from .lip import (
+    capture_point,
+    capture_point_at,
+    lip_acceleration,
+    lip_state,
+    natural_frequency,
+    orbital_energy,
+    step_to_stop,
+    time_to_reach,
+)
 from .mass_spring import (
     GRAVITY,
     METHODS,
@@ -110,6 +128,32 @@ _BALANCE = (
 )
 
 
+#: Names served lazily from course.physics.zmp (lecture 11's ZMP and support polygon; it needs
+#: mujoco only for a simulated state's contacts).
+_ZMP = (
+    "ClipZMP",
+    "KinematicZMP",
+    "SegmentMasses",
+    "SupportPolygons",
+    "clip_zmp",
+    "convex_hull",
+    "in_polygon",
+    "polygon_distance",
+    "segment_masses",
+    "support_polygons",
+    "zmp_from_com",
+    "zmp_from_forces",
+    "zmp_from_motion",
+    "zmp_from_mujoco",
+    "zmp_from_points",
+)
+
+#: Names served lazily from course.physics.walking (SIMBICON) and .stepping (capture-point
+#: steps). Their ``largest_push`` is reached through the module (``walking.largest_push``):
+#: the package's own is the standing one.
+_WALKING = ("SIMBICON", "Footstep", "Gait", "WalkResult", "neutral_pose", "walk")
+_STEPPING = ("CaptureStep", "SteppingResult", "stand_and_step")
+
 #: Names served lazily from course.physics.simulation and .controllers (the loop and the
 #: controller interface; mujoco on first use too).
 _SIMULATION = ("Fall", "HeldRoot", "Recording", "Simulation")
@@ -133,6 +177,18 @@ def __getattr__(name: str) -> Any:
         from . import balance
 
         return getattr(balance, name)
+    if name in _ZMP:
+        from . import zmp
+
+        return getattr(zmp, name)
+    if name in _WALKING:
+        from . import walking
+
+        return getattr(walking, name)
+    if name in _STEPPING:
+        from . import stepping
+
+        return getattr(stepping, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -141,6 +197,9 @@ __all__ = [
     *_BALANCE,
     *_SIMULATION,
     *_CONTROLLERS,
+    *_ZMP,
+    *_WALKING,
+    *_STEPPING,
     "BEND",
     "GRAVITY",
     "INTEGRATORS",
@@ -165,6 +224,8 @@ __all__ = [
     "box_corners",
     "box_inertia",
     "capsule_inertia",
+    "capture_point",
+    "capture_point_at",
     "contact_forces",
     "explicit_euler_step",
     "grid_cloth",
@@ -172,7 +233,11 @@ __all__ = [
     "implicit_euler_objective",
     "implicit_euler_step",
     "kinetic_energy",
+    "lip_acceleration",
+    "lip_state",
     "matrix_euler_step",
+    "natural_frequency",
+    "orbital_energy",
     "orthonormalize",
     "parallel_axis",
     "point_torque",
@@ -183,7 +248,9 @@ __all__ = [
     "simulate_rigid",
     "step",
     "step_rigid",
+    "step_to_stop",
     "symplectic_euler_step",
     "t_handle",
+    "time_to_reach",
     "world_inertia",
 ]

@@ -513,30 +513,55 @@ def largest_push(
     survived end is returned (its impulse is that times ``duration``). Deterministic: the
     simulation has no randomness.
     """
-    d = np.asarray(direction, dtype=float)
-    if d.shape != (3,) or not np.linalg.norm(d) > 0:
-        raise ValueError(f"direction: a nonzero 3-vector (y-up), got {direction!r}")
-    d = d / np.linalg.norm(d)
+    d = push_direction(direction)
     if pose is None:
         pose = standing_pose(character)
     name = character.skeleton.names[0] if joint is None else joint
 
-    def survives(force: float) -> bool:
-        push = Push(name, force * d, start, duration)
+    def survives(force: Array) -> bool:
+        push = Push(name, force, start, duration)
         run = stand(character, pose, controller=controller, duration=start + duration + settle,
                     push=push, stop_when_fallen=True, **stand_options)
         return not run.fell
 
-    if not survives(0.0):
+    return bisect_push(survives, d, tol=tol, max_force=max_force)
+
+
+def push_direction(direction: Sequence[float] | Array) -> Array:
+    """``direction`` (y-up) as a unit 3-vector; ValueError naming it if it is not a nonzero
+    3-vector."""
+    d = np.asarray(direction, dtype=float)
+    if d.shape != (3,) or not np.linalg.norm(d) > 0:
+        raise ValueError(f"direction: a nonzero 3-vector (y-up), got {direction!r}")
+    out: Array = d / np.linalg.norm(d)
+    return out
+
+
+def bisect_push(survives: Callable[[Array], bool], direction: Sequence[float] | Array, *,
+                tol: float = 5.0, max_force: float = 1e5) -> float:
+    """The largest push (N) along ``direction`` that ``survives(force)`` accepts, ``force``
+    the push in newtons, shape (3,), y-up.
+
+    0 if the unpushed run (zero force) falls. Otherwise the force doubles from 100 N until
+    one fells it (or passes ``max_force``: the last survived is returned), then bisection
+    narrows the bracket to ``tol`` newtons; the survived end is returned. Every
+    ``largest_push`` of the package (standing, walking, stepping) is this search around its
+    own run. It assumes survival is monotonic in the force; where it is not (contact makes
+    runs chaotic: ``docs/walking_control.md`` measures cases), the figure can be an isolated
+    survivor above forces that fall.
+    """
+    d = push_direction(direction)
+    tol = as_positive(tol, "tol")
+    if not survives(0.0 * d):
         return 0.0
     lo, hi = 0.0, 100.0
-    while survives(hi):
+    while survives(hi * d):
         lo, hi = hi, 2 * hi
         if hi > max_force:
             return lo
     while hi - lo > tol:
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if survives(mid) else (lo, mid)
+        lo, hi = (mid, hi) if survives(mid * d) else (lo, mid)
     return lo
 
 
@@ -547,9 +572,11 @@ __all__ = [
     "BalanceResult",
     "COMBalance",
     "VirtualForce",
+    "bisect_push",
     "com_jacobian",
     "foot_chains",
     "largest_push",
+    "push_direction",
     "stance_com_jacobian",
     "stand",
     "standing_pose",
