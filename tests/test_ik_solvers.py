@@ -510,6 +510,42 @@ def test_history_of_one_problem_in_floats_keeps_a_batchs_books():
     assert batch.iterations.tolist() == [10, 8, 12, 8, 8, 0]
 
 
+def test_the_one_iteration_driver_steps_only_the_problems_still_running():
+    """:func:`iterate` steps while some problem runs, hands the step which ones do, keeps the
+    :class:`History` and, with ``record``, every state from the start on."""
+    from typing import NamedTuple
+
+    from course.ik._engine.history import iterate
+    from course.ik._engine.ops import ARRAYS
+
+    class Run(NamedTuple):
+        tol: float = 1e-3
+        max_iter: int = 20
+        record: bool = True
+        ops: object = ARRAYS
+        done: object = False
+
+    class State(NamedTuple):
+        R: np.ndarray
+        P: None
+        err: np.ndarray
+        progress: None = None
+
+    seen = []
+
+    def halve(s, active):
+        seen.append(active.copy())
+        return State(s.R + active, None, np.where(active, s.err / 2, s.err))
+
+    start = State(np.zeros(3), None, np.array([1.0, 1e-4, 0.01]))
+    solution = iterate(Run(), start, halve)
+    assert solution.history.iterations.tolist() == [10, 0, 4]
+    assert solution.history.converged.all() and not solution.history.active.any()
+    assert solution.R.tolist() == [10, 0, 4] and solution.frames[0] is start
+    assert len(solution.frames) == len(seen) + 1 == 11
+    assert [a.tolist() for a in seen[3:5]] == [[True, False, True], [True, False, False]]
+
+
 def test_the_method_registry_is_what_solve_takes_and_documents():
     """One record per method: ``METHODS``, the default budgets, the options ``solve`` accepts
     (an unknown one is refused naming the ones it takes, a bad value naming what it must be)
@@ -563,9 +599,10 @@ def test_recorded_fabrik_at_exactly_full_reach(engine):
 
 @pytest.mark.parametrize("method", METHODS)
 def test_every_solver_gets_a_frozen_run_and_its_methods_options_record(method, monkeypatch):
-    """The engine contract: a chain solver is called with a :class:`ChainRun` and a tree
-    solver with the :class:`Problem`, ``tol``, ``max_iter`` and ``record``, both with the
-    method's own options record (frozen, every option given or defaulted)."""
+    """The one engine contract: every solver is called with its engine's run record (a
+    :class:`ChainRun`, the tree's :class:`Problem`: each with ``tol``, ``max_iter`` and
+    ``record``) and the method's own options record (frozen, every option given or
+    defaulted)."""
     import dataclasses
 
     from course.ik._engine.chain_solvers import ChainRun
@@ -592,8 +629,8 @@ def test_every_solver_gets_a_frozen_run_and_its_methods_options_record(method, m
               engine=engine, **options)
     kinds = [type(args[0]) for args in calls]
     assert kinds == ([ChainRun, Problem] if spec.chain is not None else [Problem, Problem])
-    for *head, record in calls:
-        assert head[1:] in ([], [1e-3, spec.max_iter, False])
+    for run, record in calls:
+        assert (run.tol, run.max_iter, run.record) == (1e-3, spec.max_iter, False)
         assert dataclasses.is_dataclass(record) and all(
             getattr(record, name) == value for name, value in options.items())
         with pytest.raises(dataclasses.FrozenInstanceError):

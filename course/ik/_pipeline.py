@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike
 
 from course._typing import Array
 from course._validate import as_array, broadcast_leading
+from course.skeleton import Hinge, Skeleton
 
 from ._engine.chain import SerialChain, as_vec, serial_chain
 from ._engine.chain_solvers import solve_on_chain
@@ -36,7 +37,7 @@ from .result import IKResult, SwingTwist, Target
 Engine = Literal["auto", "chain", "tree"]
 
 
-def validate(skeleton: Any, local_rotations: ArrayLike, root_position: ArrayLike,
+def validate(skeleton: Skeleton, local_rotations: ArrayLike, root_position: ArrayLike,
               targets: Any, method: str, root: str | int | None, tol: float,
               max_iter: int | None, weights: Mapping[str | int, Any] | None,
               limits: Mapping[str | int, Any] | None, record: bool, options: Mapping[str, Any],
@@ -148,14 +149,14 @@ def _tol_and_max_iter(spec: Method[Any], tol: Any, max_iter: Any) -> int:
     return int(max_iter)
 
 
-def _check_skeleton(skeleton: Any) -> None:
+def _check_skeleton(skeleton: object) -> None:
     if not all(hasattr(skeleton, a) for a in ("n_joints", "parents", "offsets", "joint_types",
                                                 "index")):
         raise ValueError(f"skeleton: expected a course.skeleton.Skeleton, got "
                          f"{type(skeleton).__name__}")
 
 
-def _start_pose(skeleton: Any, local_rotations: ArrayLike) -> Array:
+def _start_pose(skeleton: Skeleton, local_rotations: ArrayLike) -> Array:
     """The starting local rotations ``([B,] J, 4)``, normalised (a zero quaternion refused)."""
     J = skeleton.n_joints
     local = as_array(local_rotations, "local_rotations", (4,))
@@ -169,7 +170,7 @@ def _start_pose(skeleton: Any, local_rotations: ArrayLike) -> Array:
     return unit
 
 
-def _targets(skeleton: Any, targets: Any, spec: Method[Any],
+def _targets(skeleton: Skeleton, targets: Any, spec: Method[Any],
              k: int) -> tuple[dict[int, Array], dict[int, Array], Array, Array]:
     """Position and orientation targets by joint index, checked, and their relative weights
     (E,) and (E_r,), the largest 1."""
@@ -214,7 +215,7 @@ def _target_weights(value: Any, name: str) -> tuple[float, float]:
     return float(value.weight_position), float(value.weight_orientation)
 
 
-def _batch(skeleton: Any, local: Array, root_pos: Array, pos_t: dict[int, Array],
+def _batch(skeleton: Skeleton, local: Array, root_pos: Array, pos_t: dict[int, Array],
            rot_t: dict[int, Array]) -> tuple[int, bool]:
     """The batch size and whether there is a batch axis at all."""
     shape = broadcast_leading(
@@ -314,10 +315,10 @@ def _cached_model(parents: tuple[int, ...], offsets: bytes, kinds: tuple[JointAx
 
 # Per skeleton object (read-only: its offsets cannot be written), the models of the paths
 # solved on it: a slider calls ``solve`` with the same skeleton over and over.
-_MODELS: weakref.WeakKeyDictionary[Any, dict[ModelKey, Models]] = weakref.WeakKeyDictionary()
+_MODELS: weakref.WeakKeyDictionary[Skeleton, dict[ModelKey, Models]] = weakref.WeakKeyDictionary()
 
 
-def _model(skeleton: Any, root: int, eff: tuple[int, ...], reff: tuple[int, ...]) -> Models:
+def _model(skeleton: Skeleton, root: int, eff: tuple[int, ...], reff: tuple[int, ...]) -> Models:
     """The (cached) model, and its serial chain if it is one."""
     try:
         per_skeleton = _MODELS.setdefault(skeleton, {})
@@ -329,7 +330,7 @@ def _model(skeleton: Any, root: int, eff: tuple[int, ...], reff: tuple[int, ...]
     return per_skeleton[key]
 
 
-def _model_by_value(skeleton: Any, root: int, eff: tuple[int, ...],
+def _model_by_value(skeleton: Skeleton, root: int, eff: tuple[int, ...],
                     reff: tuple[int, ...]) -> Models:
     kinds: list[JointAxis] = []
     for t in skeleton.joint_types:
@@ -340,7 +341,7 @@ def _model_by_value(skeleton: Any, root: int, eff: tuple[int, ...],
                          root, eff, reff)
 
 
-def _check_movable(skeleton: Any, model: TreeModel, root: int) -> None:
+def _check_movable(skeleton: Skeleton, model: TreeModel, root: int) -> None:
     """``ValueError`` naming an effector that no joint between it and the fixed joint can
     move (all fixed, or only its own rotation free, which turns it in place)."""
     stuck = [e for nodes, mask in ((model.effectors, model.pos_mask),
@@ -369,13 +370,15 @@ def _position(x: Any, name: str) -> Array:
     return a
 
 
-def _check_hinges(skeleton: Any, model: TreeModel, local: Array) -> None:
+def _check_hinges(skeleton: Skeleton, model: TreeModel, local: Array) -> None:
     """``ValueError`` naming a hinge the solve moves whose start rotation is not a turn about
     its own axis (a hinge solve keeps the off-axis part, so the answer would depend on how
     the problem was batched)."""
     for v in np.flatnonzero(model.hinge):
         j = int(model.edge_joint[model.var_nodes[v]])
-        axis = np.asarray(skeleton.joint_types[j].axis)
+        joint = skeleton.joint_types[j]
+        assert isinstance(joint, Hinge), "the model's hinges are the skeleton's"
+        axis = np.asarray(joint.axis)
         vec = local[..., j, 1:]
         off = np.linalg.norm(vec - (vec @ axis)[..., None] * axis, axis=-1)
         if off.max() > 1e-6:
@@ -387,7 +390,8 @@ def _check_hinges(skeleton: Any, model: TreeModel, local: Array) -> None:
                 "give a turn about the hinge axis (quat_from_axis_angle(axis, angle))")
 
 
-def _weights(skeleton: Any, model: TreeModel, weights: Mapping[str | int, Any] | None) -> Array:
+def _weights(skeleton: Skeleton, model: TreeModel,
+             weights: Mapping[str | int, Any] | None) -> Array:
     if not weights:
         return model.unit_weights
     w = np.ones(model.n_cols)
@@ -399,7 +403,7 @@ def _weights(skeleton: Any, model: TreeModel, weights: Mapping[str | int, Any] |
     return w
 
 
-def _limits(skeleton: Any, m: TreeModel,
+def _limits(skeleton: Skeleton, m: TreeModel,
             limits: Mapping[str | int, Any] | None) -> tuple[Limit | None, ...]:
     """Each variable's :class:`Limit` (None: free), checked."""
     if not limits:
@@ -419,7 +423,7 @@ def _limits(skeleton: Any, m: TreeModel,
     return tuple(out)
 
 
-def _joint_limit(skeleton: Any, j: int, name: str, value: Any) -> Limit | None:
+def _joint_limit(skeleton: Skeleton, j: int, name: str, value: Any) -> Limit | None:
     """The :class:`Limit` of joint ``j`` given as ``value`` (None: no actual limit)."""
     axis = getattr(skeleton.joint_types[j], "axis", None)
     if isinstance(value, SwingTwist):
@@ -445,7 +449,7 @@ def _joint_limit(skeleton: Any, j: int, name: str, value: Any) -> Limit | None:
     return Limit("hinge", as_vec(float(c) for c in axis), lo, hi)
 
 
-def _swing_twist(skeleton: Any, j: int, name: str, value: SwingTwist) -> Limit:
+def _swing_twist(skeleton: Skeleton, j: int, name: str, value: SwingTwist) -> Limit:
     """A swing–twist cone checked; its axis defaults to the joint's rest bone direction."""
     cone, twist = value.max_swing, value.twist
     if not (_is_number(cone) and 0 <= cone <= math.pi):

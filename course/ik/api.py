@@ -14,6 +14,8 @@ from typing import Any
 
 from numpy.typing import ArrayLike
 
+from course.skeleton import Skeleton
+
 from ._pipeline import Engine, run, validate
 from .result import IKResult
 
@@ -21,7 +23,7 @@ __all__ = ["Engine", "solve"]
 
 
 def solve(
-    skeleton: Any,
+    skeleton: Skeleton,
     local_rotations: ArrayLike,
     root_position: ArrayLike,
     targets: Mapping[str | int, Any],

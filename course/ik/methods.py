@@ -67,9 +67,10 @@ class Method(Generic[Options]):
     iterative : bool
         Iterates (so a singular straight start is bent first); two-link is closed-form.
     tree : TreeSolver
-        The general engine's solver (:class:`~course.ik._engine.tree_solvers.TreeSolver`).
+        The general engine's solver (:data:`~course.ik._engine.tree_solvers.TreeSolver`,
+        a :class:`~course.ik._engine.history.Solver` on the tree's run record).
     chain : ChainSolver or None
-        The serial-chain solver (:class:`~course.ik._engine.chain_solvers.ChainSolver`);
+        The serial-chain solver (:data:`~course.ik._engine.chain_solvers.ChainSolver`);
         None: the tree engine runs every skeleton.
     batch_from : float
         Batches on the chain smaller than this run one problem at a time in floats (the

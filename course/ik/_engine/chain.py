@@ -282,15 +282,17 @@ def as_quat(c: Iterable[Scalar]) -> Quat:
 
 
 def fit_chain(chain: SerialChain, R: Pose, Q: list[Quat], P_old: Points, base: Quat,
-              P_new: Points, ops: Ops) -> tuple[Pose, Points]:
+              P_new: Points, ops: Ops) -> tuple[Pose, list[Quat], Points]:
     r"""Local rotations that put a ball-joint chain on the points ``P_new`` (same bones): each
     node's global orientation turned by the shortest arc from its old bone direction to the
     new one, :math:`Q_i' = \mathrm{arc}(p_{i+1} - p_i,\ p'_{i+1} - p'_i)\,Q_i` (so every bone
     keeps its twist), then :math:`R_i' = Q_{i-1}'^{-1} Q_i'`; ``Q`` and ``P_old`` are the
-    :math:`Q_i` and :math:`p_i` of ``R``. Also returns the positions of the new pose by
-    forward kinematics on the way, :math:`p'_{i+1} = p'_i + Q_i' l_{i+1}` from the root
-    (equal to ``P_new`` up to rounding: the residual they give is the returned pose's own)."""
+    :math:`Q_i` and :math:`p_i` of ``R``. Also returns the new orientations :math:`Q_i'` (the
+    effector's :math:`Q_{n-2}' R_{n-1}`) and the positions of the new pose by forward
+    kinematics on the way, :math:`p'_{i+1} = p'_i + Q_i' l_{i+1}` from the root (equal to
+    ``P_new`` up to rounding: the residual they give is the returned pose's own)."""
     R, parent, p = list(R), base, P_new[0]
+    Q_new: list[Quat] = []
     P = [p]
     for i in range(len(R) - 1):
         bone = chain.bones[i + 1]
@@ -298,6 +300,8 @@ def fit_chain(chain: SerialChain, R: Pose, Q: list[Quat], P_old: Points, base: Q
         q = quat_mul(turn, Q[i])
         R[i] = quat_mul(quat_conjugate(parent), q)
         parent = q
+        Q_new.append(q)
         p = add(p, quat_rotate(q, bone))
         P.append(p)
-    return R, P
+    Q_new.append(quat_mul(parent, R[-1]))
+    return R, Q_new, P

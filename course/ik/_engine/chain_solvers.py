@@ -5,16 +5,17 @@ component arrays (:mod:`course.ik._engine.ops`).
 They are the methods of :mod:`course.ik._engine.tree_solvers` specialised to one chain and one
 position target (tests check both engines give the same answers): a Jacobian step solves a
 3x3 system in closed form, FABRIK on free balls iterates on points alone and fits the
-rotations once, CCD turns the effector alone while it sweeps tip to root. Every solver is a
-:class:`ChainSolver`: it takes a :class:`ChainRun` and its method's options record
-(:mod:`course.ik._engine.request`) and returns a :class:`ChainSolved`; :func:`solve_on_chain`
-runs one on a :class:`Request`.
+rotations once, CCD turns the effector alone while it sweeps tip to root. Every solver is
+a :class:`ChainSolver`: it takes a :class:`ChainRun` and its method's options record
+(:mod:`course.ik._engine.request`) and returns a :class:`~.history.Solution` of
+:class:`ChainState`; an iterative one supplies its step to :func:`~.history.iterate` from
+:func:`chain_start`. :func:`solve_on_chain` runs one on a :class:`Request`.
 """
 
 from __future__ import annotations
 
 from functools import reduce
-from typing import Any, NamedTuple, Protocol, TypeVar
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -39,11 +40,9 @@ from .components import (
     sub,
     units_like,
 )
-from .history import History
+from .history import History, Options, Solution, Solver, iterate
 from .ops import ARRAYS, FLOATS, Components, Flag, Ops
 from .request import CCDOptions, JacobianOptions, NoOptions, Request, Solved
-
-Options = TypeVar("Options", contravariant=True)
 
 
 class ChainRun(NamedTuple):
@@ -86,22 +85,37 @@ class ChainRun(NamedTuple):
     inv_w2: tuple[float, ...] = ()
 
 
-class ChainSolved(NamedTuple):
-    """What a chain solver returns: the final local rotations of the nodes ``R``, their
-    positions ``P`` (forward kinematics), the :class:`History`, and the local rotations before
-    the first and after every iteration (``record``; else empty)."""
+class ChainState(NamedTuple):
+    """A chain method's state between two steps: the local rotations ``R`` of the nodes,
+    their global orientations ``Q`` and positions ``P`` (forward kinematics of ``R``), the
+    effector's error ``e`` :math:`= t - p_{n-1}` and its length ``err``."""
 
     R: Pose
+    Q: list[Quat]
     P: Points
-    history: History
-    frames: list[Pose]
+    e: Vec
+    err: Scalar
+
+    @property
+    def progress(self) -> None:
+        """The chain's methods let the stall test watch ``err`` itself."""
+        return None
 
 
-class ChainSolver(Protocol[Options]):
-    """A method on the serial chain: ``solver(run, options) -> ChainSolved``, ``options`` the
-    method's record (:mod:`course.ik._engine.request`)."""
+# A method on the serial chain: ``solver(run, options) -> Solution[ChainState]``.
+ChainSolver = Solver[ChainRun, Options, ChainState]
 
-    def __call__(self, run: ChainRun, options: Options, /) -> ChainSolved: ...
+
+def chain_start(run: ChainRun) -> ChainState:
+    """The state the chain's methods iterate from: forward kinematics of ``run.start``, bent
+    off a straight chain whose target lies on its line (:meth:`SerialChain.bend_if_straight`,
+    the tree engine's test)."""
+    chain, base, p0, target, ops = run.chain, run.base, run.p0, run.target, run.ops
+    Q, P = chain.forward(run.start, base, p0)
+    R, Q, P = chain.bend_if_straight(run.start, Q, P, base, p0, target, run.tol, run.limits,
+                                     ops)
+    e = sub(target, P[-1])
+    return ChainState(R, Q, P, e, ops.sqrt(dot(e, e)))
 
 
 def solve_on_chain(req: Request, solver: ChainSolver[Any], limits: ChainLimits,
@@ -142,9 +156,8 @@ def solve_on_chain(req: Request, solver: ChainSolver[Any], limits: ChainLimits,
     if req.reach_start and chain.bendable:  # near the reach: bent to its distance (reach.py)
         R, reach_start, done = chain.reach_start(R, base, p0, target, req.tol, limits, ops)
     inv_w2 = tuple((1.0 / req.col_weight**2).tolist()) if weighted else ()
-    R, P, history, frames = solver(
-        ChainRun(chain, R, base, p0, target, req.tol, req.max_iter, req.record, limits, ops,
-                 done, inv_w2), req.options)
+    solution = solver(ChainRun(chain, R, base, p0, target, req.tol, req.max_iter, req.record,
+                               limits, ops, done, inv_w2), req.options)
     covers = chain.joints == tuple(range(skeleton.n_joints))  # a chain skeleton: its own FK
 
     def pose(R: Pose, P: Points | None = None) -> tuple[Array, Array]:
@@ -157,11 +170,11 @@ def solve_on_chain(req: Request, solver: ChainSolver[Any], limits: ChainLimits,
         out[..., joints, :] = q
         return out, fk.forward_kernel(skeleton.parents, skeleton.offsets, out, root_pos)[0]
 
-    local_out, positions = pose(R, P)
-    recorded = [pose(f) for f in frames] if req.record else None
+    local_out, positions = pose(solution.R, solution.P)
+    recorded = [pose(f.R) for f in solution.frames] if req.record else None
     unreachable = chain.unreachable(target, p0, ops)
-    return Solved(local_out, root_pos.copy(), positions, history, unreachable, recorded,
-                  reach_start)
+    return Solved(local_out, root_pos.copy(), positions, solution.history, unreachable,
+                  recorded, reach_start)
 
 
 def _components(a: Array, ops: Ops) -> Components:
@@ -242,26 +255,23 @@ def _solve_sym(A: Sym3, e: Vec, lam2: float, ops: Ops) -> Vec:
             (c02 * x + c12 * y + c22 * z) * inv)
 
 
-def solve_jacobian(run: ChainRun, options: JacobianOptions, /) -> ChainSolved:
+def solve_jacobian(run: ChainRun, options: JacobianOptions, /) -> Solution[ChainState]:
     """Iterate a Jacobian method (``options.method``), as :func:`.tree_solvers.solve_jacobian`
     does on the general model: capped steps (``max_step``), backtracking (a step that raises
-    the error is undone and the next one halved), the shared :class:`History` bookkeeping."""
+    the error is undone and the next one halved)."""
     chain, base, p0, target, limits, ops = (run.chain, run.base, run.p0, run.target,
                                             run.limits, run.ops)
     method, damping, rcond, max_step = (options.method, options.damping, options.rcond,
                                         options.max_step)
-    Q, P = chain.forward(run.start, base, p0)
-    R, Q, P = chain.bend_if_straight(run.start, Q, P, base, p0, target, run.tol, limits, ops)
-    e = sub(target, P[-1])
-    err = ops.sqrt(dot(e, e))
-    history = History(err, run.tol, run.max_iter, ops=ops, done=run.done)
-    frames = [R] if run.record else []
-    step_scale = 1.0
-    while ops.any(history.active) and chain.variables:
+    step_scale: Scalar = 1.0
+
+    def step(s: ChainState, active: Flag) -> ChainState:
+        nonlocal step_scale
+        R, Q, P, e, err = s
         delta = increment(chain.columns(Q, P, base), e, method, run.inv_w2, damping, rcond, ops)
         big = reduce(ops.maximum, (ops.abs(d) for d in delta))
         k = ops.minimum(1.0, max_step / ops.maximum(big, 1e-300)) * step_scale
-        k = k * history.active
+        k = k * active
         trial = chain.step(R, Q, base, [d * k for d in delta], ops)
         if limits:
             trial = chain.project(trial, limits, ops)
@@ -270,15 +280,15 @@ def solve_jacobian(run: ChainRun, options: JacobianOptions, /) -> ChainSolved:
         err_t = ops.sqrt(dot(e_t, e_t))
         worse = err_t > err
         step_scale = ops.where(worse, 0.5 * step_scale, ops.minimum(1.0, 2.0 * step_scale))
-        R, Q, P, e, err = ops.select(worse, (R, Q, P, e, err), (trial, Q_t, P_t, e_t, err_t))
-        history.update(err)
-        if run.record:
-            frames.append(R)
-    if not ops.all(history.converged):
-        cols = np.array([np.broadcast_arrays(*c) for c in chain.columns(Q, P, base)], float)
-        history.singular = ops.flag(lost_rank(np.moveaxis(cols.reshape(len(cols), 3, -1), -1, 0),
-                                              rcond))
-    return ChainSolved(R, P, history, frames)
+        return ChainState(*ops.select(worse, (R, Q, P, e, err), (trial, Q_t, P_t, e_t, err_t)))
+
+    solution = iterate(run, chain_start(run), step)
+    if not ops.all(solution.history.converged):
+        cols = np.array([np.broadcast_arrays(*c) for c in chain.columns(
+            solution.state.Q, solution.P, base)], float)
+        solution.history.singular = ops.flag(
+            lost_rank(np.moveaxis(cols.reshape(len(cols), 3, -1), -1, 0), rcond))
+    return solution
 
 
 # --------------------------------------------------------------------------- FABRIK
@@ -408,7 +418,7 @@ def fabrik_points(P: Points, target: Vec, tol: float, max_iter: int, ops: Ops,
     return P, its, err
 
 
-def solve_fabrik(run: ChainRun, options: NoOptions, /) -> ChainSolved:
+def solve_fabrik(run: ChainRun, options: NoOptions, /) -> Solution[ChainState]:
     """FABRIK: on positions alone for a chain of free ball joints
     (:func:`solve_fabrik_points`, whose own reachability branch answers a ``done`` problem),
     else with the backward pass in joint space (:func:`solve_fabrik_joints`)."""
@@ -417,37 +427,37 @@ def solve_fabrik(run: ChainRun, options: NoOptions, /) -> ChainSolved:
     return solve_fabrik_joints(run)
 
 
-def solve_fabrik_points(run: ChainRun) -> ChainSolved:
+def solve_fabrik_points(run: ChainRun) -> Solution[ChainState]:
     """FABRIK on a chain of free ball joints (``run.limits`` empty): iterate on positions alone
-    (:func:`fabrik_points`), then fit the rotations once (:func:`fit_chain`; exact, the
-    points keep the bones). ``record`` fits every iteration's points too."""
-    chain, base, p0, target, tol, max_iter, record, ops = (
-        run.chain, run.base, run.p0, run.target, run.tol, run.max_iter, run.record, run.ops)
-    Q, P = chain.forward(run.start, base, p0)
-    R, Q, P = chain.bend_if_straight(run.start, Q, P, base, p0, target, tol, [], ops)
-    e = sub(target, P[-1])
-    history = History(ops.sqrt(dot(e, e)), tol, max_iter, ops=ops)
+    (:func:`fabrik_points`, its own loop: no stall test, a batch iterating only its problems
+    still running), then fit the rotations once (:func:`fit_chain`; exact, the points keep
+    the bones). ``record`` fits every iteration's points too."""
+    chain, base, target, tol, max_iter, record, ops = (
+        run.chain, run.base, run.target, run.tol, run.max_iter, run.record, run.ops)
+    start = chain_start(run)
     points: list[Points] = []
     errors: list[Scalar] = []
-    P_new, its, _ = fabrik_points(ops.copy(P), target, tol, max_iter, ops,
+    P_new, its, _ = fabrik_points(ops.copy(start.P), target, tol, max_iter, ops,
                                   points if record else None, errors)
     if record and len(points) < np.max(its):  # a stretch: answered before the loop
         points.append(P_new)
-    fitted = [fit_chain(chain, R, Q, P, base, f, ops) for f in (points if record else [P_new])]
-    # Residuals of the fitted poses (honest: what the returned rotations reach); without a
-    # record, the points' errors stand for the iterations in between (the fit is exact).
-    if not record:
-        history.residuals += errors[:-1]
-    for _, P in fitted if record else fitted[-1:]:
-        history.residuals.append(ops.dist(target, P[-1]))
-    history.iterations = its
-    history.active = ops.full(its, False)
-    # Recorded with nothing to iterate (a stretched start already there): the start stays.
-    R_new, P = fitted[-1] if fitted else (R, P)
-    return ChainSolved(R_new, P, history, [R] + [f for f, _ in fitted] if record else [])
+
+    def fitted(points: Points) -> ChainState:
+        """The pose that puts the chain on ``points``, with its residual (honest: what the
+        returned rotations reach)."""
+        R, Q, P = fit_chain(chain, start.R, start.Q, start.P, base, points, ops)
+        return ChainState(R, Q, P, sub(target, P[-1]), ops.dist(target, P[-1]))
+
+    fits = [fitted(f) for f in (points if record else [P_new])]
+    # Without a record, the points' errors stand for the iterations in between (the fit is
+    # exact); recorded with nothing to iterate (a stretched start already there), the start
+    # stays.
+    history = History.of([start.err, *([] if record else errors[:-1]), *(f.err for f in fits)],
+                         its, tol, max_iter, ops)
+    return Solution(fits[-1] if fits else start, history, (start, *fits) if record else ())
 
 
-def solve_fabrik_joints(run: ChainRun) -> ChainSolved:
+def solve_fabrik_joints(run: ChainRun) -> Solution[ChainState]:
     r"""FABRIK with joint constraints (hinges, limits): forward reaching on the points
     (:func:`reach_forward`), then the backward pass in joint space, root to tip, with the
     parent placed (:math:`Q_{i-1}`, :math:`p_i` by forward kinematics). A ball joint turns its
@@ -464,15 +474,13 @@ def solve_fabrik_joints(run: ChainRun) -> ChainSolved:
     n = len(chain.bones)
     axis_of = dict(zip(chain.variables, chain.axes, strict=True))
     limits_of = {v: [lim for lim in limits if lim[0] == v] for v in chain.variables}
-    Q, P = chain.forward(run.start, base, p0)
-    R, _, P = chain.bend_if_straight(run.start, Q, P, base, p0, target, run.tol, limits, ops)
-    d, rest = bone_directions(P, ops)
-    e = sub(target, P[-1])
-    history = History(ops.sqrt(dot(e, e)), run.tol, run.max_iter, ops=ops, done=run.done)
-    frames = [R] if run.record else []
-    while ops.any(history.active) and chain.variables:
-        reached = reach_forward(P, target, d, rest, ops)
-        new, q, p = list(R), base, p0
+    start = chain_start(run)
+    d, rest = bone_directions(start.P, ops)
+
+    def step(s: ChainState, active: Flag) -> ChainState:
+        reached = reach_forward(s.P, target, d, rest, ops)
+        new, q, p = list(s.R), base, p0
+        Q_new: list[Quat] = []
         P_new: Points = []
         for i in range(n):  # backward reaching: forward kinematics, aiming every joint
             if i:
@@ -495,16 +503,16 @@ def solve_fabrik_joints(run: ChainRun) -> ChainSolved:
                     new[i] = hinge_turn(new[i], q, axis, us, ws, ops)
                 new = chain.project(new, limits_of[i], ops)
             q = quat_mul(q, new[i])
-        e_new = sub(target, P_new[-1])
-        R, P, e = ops.select(history.active, (new, P_new, e_new), (R, P, e))
-        history.update(ops.sqrt(dot(e, e)))
-        if run.record:
-            frames.append(R)
-    return ChainSolved(R, P, history, frames)
+            Q_new.append(q)
+        R, Q, P, e = ops.select(active, (new, Q_new, P_new, sub(target, P_new[-1])),
+                                (s.R, s.Q, s.P, s.e))
+        return ChainState(R, Q, P, e, ops.sqrt(dot(e, e)))
+
+    return iterate(run, start, step)
 
 
 # --------------------------------------------------------------------------- CCD
-def solve_ccd(run: ChainRun, options: CCDOptions, /) -> ChainSolved:
+def solve_ccd(run: ChainRun, options: CCDOptions, /) -> Solution[ChainState]:
     r"""CCD sweeps, as :func:`.tree_solvers.solve_ccd` on the general model: every joint
     in turn (tip to root, or root to tip) turns the effector direction :math:`e - r_i` towards
     :math:`t - r_i` (:func:`aim`), is projected into its limit, and the chain below it turns
@@ -518,13 +526,9 @@ def solve_ccd(run: ChainRun, options: CCDOptions, /) -> ChainSolved:
     axis_of = dict(zip(chain.variables, chain.axes, strict=True))
     limits_of = {v: [lim for lim in limits if lim[0] == v] for v in chain.variables}
     order = chain.variables[::-1] if tip_to_root else chain.variables
-    Q, P = chain.forward(run.start, base, p0)
-    R, Q, P = chain.bend_if_straight(run.start, Q, P, base, p0, target, run.tol, limits, ops)
-    e = sub(target, P[-1])
-    history = History(ops.sqrt(dot(e, e)), run.tol, run.max_iter, ops=ops, done=run.done)
-    frames = [R] if run.record else []
-    while ops.any(history.active) and chain.variables:
-        new, Q, P = list(R), list(Q), list(P)
+
+    def step(s: ChainState, active: Flag) -> ChainState:
+        new, Q, P = list(s.R), list(s.Q), list(s.P)
         for v in order:
             parent, pivot = (Q[v - 1] if v else base), P[v]
             new[v] = aim(new[v], parent, axis_of[v], sub(P[-1], pivot), sub(target, pivot),
@@ -537,10 +541,9 @@ def solve_ccd(run: ChainRun, options: CCDOptions, /) -> ChainSolved:
                 P[j] = add(pivot, quat_rotate(turn, sub(P[j], pivot)))
                 Q[j] = quat_mul(turn, Q[j])
             Q[v] = Qv
-        R = ops.select(history.active, new, R)
+        R = ops.select(active, new, s.R)
         Q, P = chain.forward(R, base, p0)
         e = sub(target, P[-1])
-        history.update(ops.sqrt(dot(e, e)))
-        if run.record:
-            frames.append(R)
-    return ChainSolved(R, P, history, frames)
+        return ChainState(R, Q, P, e, ops.sqrt(dot(e, e)))
+
+    return iterate(run, chain_start(run), step)

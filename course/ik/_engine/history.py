@@ -1,11 +1,130 @@
-"""The bookkeeping every iterative solver shares: residuals, iterations, stalls and reasons,
-for one problem in floats or a batch in arrays (:mod:`course.ik._engine.ops`)."""
+"""The iteration every solver runs, for one problem in floats or a batch in arrays
+(:mod:`course.ik._engine.ops`): :func:`iterate`, the one driver of both engines (a method
+supplies only its step), the :class:`Solution` it returns, and :class:`History`, its
+bookkeeping of residuals, iterations, stalls and reasons."""
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Generic, Protocol, TypeVar
 
-from .ops import ARRAYS, FLOATS, Ops
+from .ops import ARRAYS, FLOATS, Flag, Ops
+
+Pose_co = TypeVar("Pose_co", covariant=True)
+Points_co = TypeVar("Points_co", covariant=True)
+PoseT = TypeVar("PoseT")
+PointsT = TypeVar("PointsT")
+
+
+class State(Protocol[Pose_co, Points_co]):
+    """What :func:`iterate` reads of a method's state between two steps (an engine's record,
+    :class:`~.chain_solvers.ChainState` or :class:`~.tree_solvers.TreeState`)."""
+
+    @property
+    def R(self) -> Pose_co:
+        """The pose (what a recorded frame keeps)."""
+
+    @property
+    def P(self) -> Points_co:
+        """Its node positions."""
+
+    @property
+    def err(self) -> Any:
+        """The largest effector error of every problem (a float, or (B,))."""
+
+    @property
+    def progress(self) -> Any:
+        """The objective the stall test watches instead of ``err`` (None: ``err``)."""
+
+
+S = TypeVar("S", bound=State[Any, Any])
+S_co = TypeVar("S_co", bound=State[Any, Any], covariant=True)
+RunT = TypeVar("RunT", contravariant=True)
+Options = TypeVar("Options", contravariant=True)
+
+# A method's step: the state after one iteration of every problem still running (``active``).
+Step = Callable[[S, Flag], S]
+
+
+class Run(Protocol):
+    """What :func:`iterate` reads of a solver's run record (:class:`~.chain_solvers.ChainRun`,
+    the tree's :class:`~.tree.Problem`)."""
+
+    @property
+    def tol(self) -> float: ...
+
+    @property
+    def max_iter(self) -> int: ...
+
+    @property
+    def record(self) -> bool: ...
+
+    @property
+    def ops(self) -> Ops: ...
+
+    @property
+    def done(self) -> Flag:
+        """The problems whose start is already their best pose (:mod:`.reach`)."""
+
+
+@dataclass(frozen=True)
+class Solution(Generic[S_co]):
+    """What a solver of either engine returns: its final state, the :class:`History`, and the
+    states before the first and after every iteration (``record``; else empty)."""
+
+    state: S_co
+    history: History
+    frames: tuple[S_co, ...] = ()
+
+    @property
+    def R(self: Solution[State[PoseT, Any]]) -> PoseT:
+        """The final pose."""
+        return self.state.R
+
+    @property
+    def P(self: Solution[State[Any, PointsT]]) -> PointsT:
+        """The final pose's node positions."""
+        return self.state.P
+
+
+class Solver(Protocol[RunT, Options, S_co]):
+    """A method on an engine: ``solver(run, options) -> Solution``, ``run`` the engine's run
+    record, ``options`` the method's record (:mod:`course.ik._engine.request`)."""
+
+    def __call__(self, run: RunT, options: Options, /) -> Solution[S_co]: ...
+
+
+def iterate(run: Run, state: S, step: Step[S]) -> Solution[S]:
+    """Iterate a method: ``state = step(state, active)`` while some problem is still running.
+
+    Parameters
+    ----------
+    run : Run
+        The engine's run record: ``tol``, ``max_iter``, ``record``, ``ops`` and ``done``.
+    state : State
+        The start (forward kinematics of the start pose, bent where the engine bends it);
+        ``state.err`` a float, or (B,).
+    step : callable
+        One iteration of the method, ``(state, active) -> state``; ``active`` (a bool, or
+        (B,)) marks the problems still running (:attr:`History.active`: not within ``tol``,
+        not stalled, below ``max_iter``), and the step leaves the others as they are.
+
+    Returns
+    -------
+    Solution
+        The last state, the :class:`History`, and with ``run.record`` every state from the
+        start on (one more than the iterations).
+    """
+    ops, record = run.ops, run.record
+    history = History(state.err, run.tol, run.max_iter, state.progress, ops, run.done)
+    frames = [state] if record else []
+    while ops.any(history.active):
+        state = step(state, history.active)
+        history.update(state.err, state.progress)
+        if record:
+            frames.append(state)
+    return Solution(state, history, tuple(frames))
 
 
 class History:
@@ -37,6 +156,18 @@ class History:
                        else ops.full(err, False))
         # Set by the Jacobian methods: the final Jacobian has lost rank.
         self.singular = ops.full(err, False)
+
+    @classmethod
+    def of(cls, residuals: list[Any], iterations: Any, tol: float, max_iter: int,
+           ops: Ops = ARRAYS) -> History:
+        """The books of a solve that iterated on its own (FABRIK on points alone): its
+        residuals before the first and after every iteration and its iterations (per
+        problem); nothing runs any more, nothing stalled."""
+        history = cls(residuals[0], tol, max_iter, ops=ops)
+        history.residuals += residuals[1:]
+        history.iterations = iterations
+        history.active = ops.full(iterations, False)
+        return history
 
     def update(self, err: Any, progress: Any = None) -> Any:
         """Record ``err`` (B,); ``progress`` (B,), if given, is the objective the solver

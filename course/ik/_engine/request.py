@@ -7,11 +7,12 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
-from typing import Any, Literal, NamedTuple
+from typing import Literal, NamedTuple
 
 from numpy.typing import ArrayLike
 
 from course._typing import Array
+from course.skeleton import Skeleton
 
 from .chain import SerialChain
 from .components import Limit
@@ -75,7 +76,7 @@ class Request:
     whether a target near the full reach starts from the reach-aware start (:mod:`.reach`).
     """
 
-    skeleton: Any
+    skeleton: Skeleton
     method: str
     local: Array  # ([B,] J, 4) unit quaternions
     root_pos: Array  # ([B,] 3)

@@ -51,7 +51,7 @@ from course.rotations._kernels import (
 )
 
 from .components import Limit, limit
-from .ops import ARRAYS
+from .ops import ARRAYS, Ops
 from .reach import reach_points
 
 # A joint as :func:`build_model` takes it: a hinge's axis (3,), None for a ball (or universal)
@@ -503,7 +503,8 @@ def unreachable_targets(model: TreeModel, target_pos: Array, p0: Array) -> NDArr
 
 @dataclass
 class Problem:
-    """One model with a batch of ``B`` starting poses and targets, ready to iterate.
+    """One model with a batch of ``B`` starting poses and targets, ready to iterate: the tree
+    engine's run record (:class:`~course.ik._engine.history.Run`).
 
     Attributes
     ----------
@@ -519,6 +520,8 @@ class Problem:
         Each variable's limit (:class:`~course.ik._engine.components.Limit`; None: free).
     pos_weight, rot_weight : ndarray, shapes (E,), (E_r,)
         The targets' relative weights (largest 1).
+    tol, max_iter, record
+        As :func:`course.ik.solve` takes them.
     done : bool or ndarray of bool, shape (B,)
         Problems whose start is already their best pose (:meth:`reach_start`): the solvers'
         :class:`~course.ik._engine.history.History` stops them at once.
@@ -534,6 +537,9 @@ class Problem:
     limits: tuple[Limit | None, ...]
     pos_weight: Array
     rot_weight: Array
+    tol: float
+    max_iter: int
+    record: bool
     done: Any = False
 
     def __post_init__(self) -> None:
@@ -544,6 +550,11 @@ class Problem:
     @property
     def batch(self) -> int:
         return len(self.Rn)
+
+    @property
+    def ops(self) -> Ops:
+        """A batch in arrays (:data:`~course.ik._engine.ops.ARRAYS`), always."""
+        return ARRAYS
 
     def forward(self, Rn: Array) -> tuple[Array, Array]:
         return self.model.forward(Rn, self.base, self.p0)

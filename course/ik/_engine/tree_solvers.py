@@ -8,14 +8,17 @@ docstring has the maths), written for a re-rooted tree: CCD turns one variable a
 and fits the rotations level by level (:meth:`Problem.fit`), the Jacobian methods step all
 variables at once with the steps of :mod:`course.ik.jacobian`, and the two-link solve places
 the middle joint by the law of cosines (:func:`course.ik.two_link.two_link`). Every solver is
-a :class:`TreeSolver`: it takes the :class:`Problem`, ``tol``, ``max_iter``, ``record`` and
-its method's options record (:mod:`course.ik._engine.request`) and returns a
-:class:`TreeSolved`; :func:`solve_on_tree` runs one on a :class:`Request`.
+a :class:`TreeSolver`: it takes the :class:`Problem` (its run record: the batch, ``tol``,
+``max_iter``, ``record``) and its method's options record (:mod:`course.ik._engine.request`)
+and returns a :class:`~.history.Solution` of :class:`TreeState`, the method supplying its
+step to :func:`~.history.iterate` from :func:`tree_start`; :func:`solve_on_tree` runs one on
+a :class:`Request`.
 """
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple, Protocol, TypeVar
+from dataclasses import replace
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,13 +38,14 @@ from course.rotations._kernels import (
     orthonormalize,
     rotvec_from_matrix,
 )
+from course.skeleton import Skeleton
 
 from ..jacobian import dls_step, lost_rank, pinv_step, transpose_step
 from ..two_link import two_link
 from .chain import as_vec
 from .chain_solvers import fabrik_points
-from .history import History
-from .ops import ARRAYS
+from .history import History, Options, Solution, Solver, iterate
+from .ops import ARRAYS, Flag
 from .request import (
     CCDOptions,
     JacobianOptions,
@@ -55,29 +59,37 @@ from .tree import Problem, TreeModel
 # DLS damping when none is given, as a share of the longest path to an effector.
 DEFAULT_DAMPING = 0.05
 
-Options = TypeVar("Options", contravariant=True)
+
+class TreeState(NamedTuple):
+    r"""A tree method's state between two steps: the edge rotations ``R`` (B, N, 3, 3), the
+    nodes' global orientations ``M`` and positions ``P`` (B, N, 3) (forward kinematics of
+    ``R``), the error vector ``e`` and the largest effector error ``err``
+    (:meth:`Problem.error`), and the objective the stall test watches (the Jacobian methods':
+    :math:`\lVert\Delta e\rVert`; None: ``err``)."""
+
+    R: Array
+    M: Array
+    P: Array
+    e: Array
+    err: Array
+    progress: Array | None = None
 
 
-class TreeSolved(NamedTuple):
-    """What a tree solver returns: the final edge rotations ``Rn`` (B, N, 3, 3), the
-    :class:`History`, and the edge rotations before the first and after every iteration
-    (``record``; else empty)."""
-
-    Rn: Array
-    history: History
-    frames: list[Array]
+# A method on the tree model: ``solver(problem, options) -> Solution[TreeState]``.
+TreeSolver = Solver[Problem, Options, TreeState]
 
 
-class TreeSolver(Protocol[Options]):
-    """A method on the tree model: ``solver(problem, tol, max_iter, record, options) ->
-    TreeSolved``, ``options`` the method's record (:mod:`course.ik._engine.request`)."""
+def tree_start(problem: Problem, objective: bool = False) -> TreeState:
+    """The state the tree's methods iterate from: forward kinematics of ``problem.Rn`` (bent
+    by :func:`solve_on_tree` already) and its error; with ``objective`` the length of the
+    error vector too."""
+    M, p = problem.forward(problem.Rn)
+    e, err = problem.error(M, p)
+    return TreeState(problem.Rn, M, p, e, err, np.sqrt((e * e).sum(axis=1)) if objective
+                     else None)
 
-    def __call__(self, problem: Problem, tol: float, max_iter: int, record: bool,
-                 options: Options, /) -> TreeSolved: ...
 
-
-def solve_ccd(problem: Problem, tol: float, max_iter: int, record: bool, options: CCDOptions,
-              /) -> TreeSolved:
+def solve_ccd(problem: Problem, options: CCDOptions, /) -> Solution[TreeState]:
     r"""CCD (:mod:`course.ik.ccd`); ``max_angle`` caps each joint's turn per step (radians).
     Limits are enforced by projecting after every joint's turn.
 
@@ -89,18 +101,16 @@ def solve_ccd(problem: Problem, tol: float, max_iter: int, record: bool, options
     """
     m = problem.model
     max_angle = options.max_angle
-    Rn = problem.Rn.copy()
-    M, p = problem.forward(Rn)
-    history = History(problem.error(M, p)[1], tol, max_iter, done=problem.done)
-    frames = [Rn.copy()] if record else []
     first_col = np.searchsorted(m.col_var, np.arange(len(m.var_nodes)))
     order = np.arange(len(m.var_nodes))
     if options.tip_to_root:
         order = order[::-1]
     axes_local = m.var_axes()
     last = _last_joints(problem)
-    while history.active.any():
-        run = history.active[:, None, None]
+
+    def step(s: TreeState, active: Flag) -> TreeState:
+        Rn, M, p = s.R.copy(), s.M.copy(), s.P.copy()  # turned in place below
+        run = active[:, None, None]
         for v in order:
             d = m.var_nodes[v]
             piv = p[:, m.pivot[d]][:, None]
@@ -131,10 +141,9 @@ def solve_ccd(problem: Problem, tol: float, max_iter: int, record: bool, options
                     moved[d] = False
                 M[:, m.descendant[d]] = R[:, None] @ M[:, m.descendant[d]]
                 p[:, moved] = piv + matvec(R[:, None], p[:, moved] - piv)
-        history.update(problem.error(M, p)[1])
-        if record:
-            frames.append(Rn.copy())
-    return TreeSolved(Rn, history, frames)
+        return TreeState(Rn, M, p, *problem.error(M, p))
+
+    return iterate(problem, tree_start(problem), step)
 
 
 def _ccd_pairs(problem: Problem, M: Array, p: Array, piv: Array, col: int,
@@ -181,8 +190,7 @@ def _turn(problem: Problem, Rn: Array, M: Array, d: int, R: Array) -> None:
         Rn[:, d] = orthonormalize(np.swapaxes(Mpar, -1, -2) @ R @ Mpar @ Rn[:, d])
 
 
-def solve_fabrik(problem: Problem, tol: float, max_iter: int, record: bool, options: NoOptions,
-                 /) -> TreeSolved:
+def solve_fabrik(problem: Problem, options: NoOptions, /) -> Solution[TreeState]:
     """FABRIK (:mod:`course.ik.fabrik`) on any tree of paths, several effectors.
 
     Plain chains of unconstrained ball joints iterate on positions alone and fit rotations
@@ -194,28 +202,24 @@ def solve_fabrik(problem: Problem, tol: float, max_iter: int, record: bool, opti
     (:func:`_orient_ends`).
     """
     m = problem.model
-    Rn = problem.Rn
-    _, p = problem.forward(Rn)
+    start = tree_start(problem)
     lengths = norm(m.bone)
     branching = np.bincount(m.parent[1:], minlength=m.n_nodes).max() > 1
     free = (not branching and not m.hinge.any() and not problem.limited
             and not len(m.rot_effectors) and len(m.effectors) == 1
-            and m.effectors[0] == m.n_nodes - 1 and not record)
+            and m.effectors[0] == m.n_nodes - 1 and not problem.record)
     if free:
-        P = p.copy()
+        P = start.P.copy()
         errors: list[Array] = []
-        its, _ = _fabrik_chain(P, problem.target_pos[:, 0], tol, max_iter, errors)
-        Rn = problem.fit_free(Rn, P)
-        history = History(norm(problem.target_pos - p[:, m.effectors]).max(axis=1), tol, max_iter)
-        history.iterations = its
+        its, _ = _fabrik_chain(P, problem.target_pos[:, 0], problem.tol, problem.max_iter,
+                               errors)
+        Rn = problem.fit_free(problem.Rn, P)
+        M, p = problem.forward(Rn)
+        e, err = problem.error(M, p)
         # The points' errors stand for the iterations; the last is that of the fitted pose.
-        history.residuals += errors[:-1]
-        history.residuals.append(problem.error(*problem.forward(Rn))[1])
-        history.active[:] = False
-        return TreeSolved(Rn, history, [])
+        history = History.of([start.err, *errors[:-1], err], its, problem.tol, problem.max_iter)
+        return Solution(TreeState(Rn, M, p, e, err), history)
 
-    history = History(problem.error(*problem.forward(Rn))[1], tol, max_iter, done=problem.done)
-    frames = [Rn] if record else []
     # Each node's pull on its sub-base: the heaviest position target below it (0: none).
     pull = (m.descendant[:, m.effectors] * problem.pos_weight).max(axis=1, initial=0.0)
     total = np.bincount(m.parent[1:], weights=pull[1:], minlength=m.n_nodes)
@@ -224,10 +228,11 @@ def solve_fabrik(problem: Problem, tol: float, max_iter: int, record: bool, opti
     deepest_first = m.levels[:0:-1]
     held = _held_ends(problem)
     rows = np.arange(problem.batch)[:, None]  # every problem's row, beside a level's parents
-    while history.active.any():
-        P = p.copy()
+
+    def step(s: TreeState, active: Flag) -> TreeState:
+        Rn, old = s.R, s.P
+        P = old.copy()
         P[:, m.effectors] = problem.target_pos
-        old = p
         for lvl in deepest_first:  # forward reaching, sub-bases to the centroid
             par = m.parent[lvl]
             fallback = old[:, par] - old[:, lvl]
@@ -247,12 +252,11 @@ def solve_fabrik(problem: Problem, tol: float, max_iter: int, record: bool, opti
         new = problem.fit(Rn, P)  # backward reaching from the fixed joint, in joint space
         if len(m.rot_effectors):
             new = _orient_ends(problem, new)
-        Rn = np.where(history.active[:, None, None, None], new, Rn)
+        Rn = np.where(active[:, None, None, None], new, Rn)
         M, p = problem.forward(Rn)
-        history.update(problem.error(M, p)[1])
-        if record:
-            frames.append(Rn)
-    return TreeSolved(Rn, history, frames)
+        return TreeState(Rn, M, p, *problem.error(M, p))
+
+    return iterate(problem, start, step)
 
 
 def _held_ends(problem: Problem) -> list[tuple[int, int, int]]:
@@ -326,8 +330,7 @@ def _fabrik_chain(P: Array, t: Array, tol: float, max_iter: int,
     return np.asarray(its), np.asarray(err)
 
 
-def solve_jacobian(problem: Problem, tol: float, max_iter: int, record: bool,
-                   options: JacobianOptions, /) -> TreeSolved:
+def solve_jacobian(problem: Problem, options: JacobianOptions, /) -> Solution[TreeState]:
     r"""Iterate one Jacobian method of :mod:`course.ik.jacobian` (``options.method``).
 
     ``max_step`` caps the largest joint increment per iteration (radians; the step keeps its
@@ -343,16 +346,12 @@ def solve_jacobian(problem: Problem, tol: float, max_iter: int, record: bool,
                                         options.max_step)
     w = problem.col_weight
     uniform = bool(np.all(w == 1.0))
-    Rn = problem.Rn
-    M, p = problem.forward(Rn)
-    e, err = problem.error(M, p)
-    # The objective every step reduces: the length of the whole error vector,
-    # sqrt(sum of squares) (one effector: its error).
-    size = np.sqrt((e * e).sum(axis=1))
-    history = History(err, tol, max_iter, progress=size, done=problem.done)
-    frames = [Rn] if record else []
     scale = np.ones(problem.batch)
-    while history.active.any() and m.n_cols:
+
+    def step(s: TreeState, active: Flag) -> TreeState:
+        nonlocal scale
+        Rn, M, p, e, err, size = s
+        assert size is not None, "the Jacobian methods start with their objective"
         J = m.jacobian(M, p, problem.base)
         if problem.row_weight is not None:  # the rows of weighted targets, as in the error
             J = J * problem.row_weight[:, None]
@@ -366,7 +365,7 @@ def solve_jacobian(problem: Problem, tol: float, max_iter: int, record: bool,
         delta = y if uniform else y / w
         big = np.abs(delta).max(axis=1, keepdims=True)
         delta = delta * np.minimum(1.0, max_step / np.maximum(big, 1e-300))
-        delta = np.where(history.active[:, None], delta * scale[:, None], 0.0)
+        delta = np.where(active[:, None], delta * scale[:, None], 0.0)
         trial = problem.project(m.step(Rn, M, problem.base, delta))
         M_t, p_t = problem.forward(trial)
         e_t, err_t = problem.error(M_t, p_t)
@@ -377,22 +376,21 @@ def solve_jacobian(problem: Problem, tol: float, max_iter: int, record: bool,
         worse = size_t > size
         scale = np.where(worse, 0.5 * scale, np.minimum(1.0, 2.0 * scale))
         keep = ~worse
-        Rn = np.where(keep[:, None, None, None], trial, Rn)
-        M = np.where(keep[:, None, None, None], M_t, M)
-        p = np.where(keep[:, None, None], p_t, p)
-        e = np.where(keep[:, None], e_t, e)
-        err = np.where(keep, err_t, err)
-        size = np.where(keep, size_t, size)
-        history.update(err, progress=size)
-        if record:
-            frames.append(Rn)
-    if m.n_cols and not history.converged.all():
-        history.singular = lost_rank(m.jacobian(M, p, problem.base), rcond)
-    return TreeSolved(Rn, history, frames)
+        return TreeState(np.where(keep[:, None, None, None], trial, Rn),
+                         np.where(keep[:, None, None, None], M_t, M),
+                         np.where(keep[:, None, None], p_t, p), np.where(keep[:, None], e_t, e),
+                         np.where(keep, err_t, err), np.where(keep, size_t, size))
+
+    # The objective every step reduces: the length of the whole error vector,
+    # sqrt(sum of squares) (one effector: its error).
+    solution = iterate(problem, tree_start(problem, objective=True), step)
+    if not solution.history.converged.all():
+        solution.history.singular = lost_rank(m.jacobian(solution.state.M, solution.P,
+                                                         problem.base), rcond)
+    return solution
 
 
-def solve_two_link(problem: Problem, tol: float, max_iter: int, record: bool,
-                   options: TwoLinkOptions, /) -> TreeSolved:
+def solve_two_link(problem: Problem, options: TwoLinkOptions, /) -> Solution[TreeState]:
     """The analytic two-bone solve; a start already within ``tol`` is kept (0 iterations),
     and a target the joints cannot reach (out of reach, off a hinge's plane) ends in their
     closest pose, reported ``"unreachable"`` or ``"stalled"`` (never ``"max_iterations"``:
@@ -403,30 +401,33 @@ def solve_two_link(problem: Problem, tol: float, max_iter: int, record: bool,
         raise ValueError(
             "method: 'two_link' needs the path from root to the one effector to be two bones "
             f"(three joints), got {m.n_nodes} joints; choose root accordingly")
-    M, p = problem.forward(problem.Rn)
-    history = History(problem.error(M, p)[1], tol, 1)
     t = problem.target_pos[:, 0]
     hip = np.flatnonzero(m.var_nodes == 0)
     knee = np.flatnonzero(m.var_nodes == 1)
     axes = m.var_axes()
     both = bool(not m.up.any() and len(hip) and len(knee))
-    if both and m.hinge[hip[0]]:
-        Rn = _two_link_hinge_hip(problem, p, t, axes[hip[0]],
-                                 axes[knee[0]] if m.hinge[knee[0]] else None, pole, flip)
-        b = problem.forward(Rn)[1][:, 1]
-    elif both and m.hinge[knee[0]]:
-        Rn, b, _ = _two_link_hinge_knee(problem, M, p, t, axes[knee[0]], pole, flip)
-    else:
-        Rn = problem.Rn
-        b, _, _ = two_link(p[:, 0], p[:, 1], p[:, 2], t, pole, flip)
-    # With both joints free each aims at its own point (exact: no least-squares compromise).
-    Rn = problem.fit(Rn, np.stack([p[:, 0], b, t], 1), subtree=not both)
-    if not history.active.any():  # every start within tolerance already: nothing to do
-        return TreeSolved(problem.Rn, history, [problem.Rn] if record else [])
-    Rn = np.where(history.active[:, None, None, None], Rn, problem.Rn)
-    history.update(problem.error(*problem.forward(Rn))[1])
-    history.stalled = ~history.converged
-    return TreeSolved(Rn, history, [problem.Rn, Rn] if record else [])
+
+    def step(s: TreeState, active: Flag) -> TreeState:
+        M, p = s.M, s.P
+        if both and m.hinge[hip[0]]:
+            Rn = _two_link_hinge_hip(problem, p, t, axes[hip[0]],
+                                     axes[knee[0]] if m.hinge[knee[0]] else None, pole, flip)
+            b = problem.forward(Rn)[1][:, 1]
+        elif both and m.hinge[knee[0]]:
+            Rn, b, _ = _two_link_hinge_knee(problem, M, p, t, axes[knee[0]], pole, flip)
+        else:
+            Rn = problem.Rn
+            b, _, _ = two_link(p[:, 0], p[:, 1], p[:, 2], t, pole, flip)
+        # With both joints free each aims at its own point (exact: no least-squares compromise).
+        Rn = problem.fit(Rn, np.stack([p[:, 0], b, t], 1), subtree=not both)
+        Rn = np.where(active[:, None, None, None], Rn, s.R)
+        M, p = problem.forward(Rn)
+        return TreeState(Rn, M, p, *problem.error(M, p))
+
+    # Closed form: one step whatever the budget, from the start as given (no bend).
+    solution = iterate(replace(problem, max_iter=1), tree_start(problem), step)
+    solution.history.stalled = ~solution.history.converged
+    return solution
 
 
 def _two_link_hinge_hip(problem: Problem, p: Array, t: Array, hip_axis: Array,
@@ -534,11 +535,13 @@ def solve_on_tree(req: Request, solver: TreeSolver[Any], iterative: bool = True)
             axis = None if chain.free_balls else np.array(chain.axes[0])
             problem.Rn, reach_start = problem.reach_start(problem.Rn, req.tol, axis)
         problem.Rn = problem.bend_if_straight(problem.Rn, req.tol)
-    Rn, history, frames = solver(problem, req.tol, req.max_iter, req.record, req.options)
+    solution = solver(problem, req.options)
+    history = solution.history
     local_b, root_b, Q_k, p_k = base
-    pose = _pose(req.skeleton, problem.model, local_b, root_b, Q_k, p_k, Rn)
+    pose = _pose(req.skeleton, problem.model, local_b, root_b, Q_k, p_k, solution.R)
     recorded = []
     if req.record:
+        frames = [f.R for f in solution.frames]
         T, B = len(frames), req.B
         stacked = _pose(req.skeleton, problem.model, np.tile(local_b, (T, 1, 1)),
                         np.tile(root_b, (T, 1)), None if Q_k is None else np.tile(Q_k, (T, 1)),
@@ -583,13 +586,13 @@ def problem_of(req: Request) -> tuple[Problem, tuple[Array, Array, Array | None,
         target_rot=np.stack([matrix_from_quat(np.broadcast_to(rot_t[j], (B, 4))) for j in rot_t],
                             1) if rot_t else np.zeros((B, 0, 3, 3)),
         col_weight=req.col_weight, limits=req.limits, pos_weight=req.pos_weight,
-        rot_weight=req.rot_weight,
+        rot_weight=req.rot_weight, tol=req.tol, max_iter=req.max_iter, record=req.record,
     )
     problem.Rn = problem.project(problem.Rn)
     return problem, (local_b, root_b, Q_k, p_k)
 
 
-def _pose(skeleton: Any, model: TreeModel, local: Array, root_pos: Array, Qk: Array | None,
+def _pose(skeleton: Skeleton, model: TreeModel, local: Array, root_pos: Array, Qk: Array | None,
           pk: Array, Rn: Array) -> tuple[Array, Array, Array]:
     """Local rotations, root position and global positions of solved edge rotations."""
     local = local.copy()
