@@ -25,6 +25,27 @@ NOT_GRADED_EXIT = 3  # grade's exit status when a submission could not be graded
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``python -m autograder`` with ``argv``: check, gradescope or grade; the exit
+    status (a bad argument exits 2 with argparse's message naming it)."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    if args.command == "gradescope":
+        return _gradescope(parser, args)
+    spec = load(args.assignment)
+    try:
+        seed = _seed(args)
+        floor = None if args.command == "check" or args.scheduler else (
+            args.min_isolation or FLOOR)
+        level = level_for(args.isolation, floor)
+    except ValueError as exc:
+        parser.error(str(exc))
+    if args.command == "check":
+        return _check(parser, args, spec, seed, level)
+    return _grade(parser, args, spec, seed, level)
+
+
+def _parser() -> argparse.ArgumentParser:
+    """The three commands and their arguments."""
     parser = argparse.ArgumentParser(prog="python -m autograder", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
 
@@ -65,27 +86,24 @@ def main(argv: list[str] | None = None) -> int:
                    "in --out and unchanged since")
     g.add_argument("--lms", action="append", default=[], choices=LMS_FILES, help="also write "
                    "the totals as this LMS imports them (grades-<lms>.csv; may be repeated)")
+    return parser
 
-    args = parser.parse_args(argv)
-    if args.command == "gradescope":
-        from .gradescope.bundle import build, built_message  # only this command needs them
 
-        try:
-            made = build(args.assignment, args.out, args.seed_file)
-        except ValueError as exc:
-            parser.error(str(exc))
-        print(built_message(args.out, made), file=sys.stderr)
-        return 0
-    spec = load(args.assignment)
+def _gradescope(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """``gradescope``: build the bundle's zip."""
+    from .gradescope.bundle import build, built_message  # only this command needs them
+
     try:
-        seed = _seed(args)
-        floor = None if args.command == "check" or args.scheduler else (
-            args.min_isolation or FLOOR)
-        level = level_for(args.isolation, floor)
+        made = build(args.assignment, args.out, args.seed_file)
     except ValueError as exc:
         parser.error(str(exc))
-    if args.command == "check":
-        return _check(parser, args, spec, seed, level)
+    print(built_message(args.out, made), file=sys.stderr)
+    return 0
+
+
+def _grade(parser: argparse.ArgumentParser, args: argparse.Namespace, spec: Assignment,
+           seed: str | None, level: Isolation) -> int:
+    """``grade``: a class's submissions, on a local pool or a cluster."""
     if args.scheduler and args.isolation:
         parser.error("--isolation: with --scheduler each worker grades at its strongest; "
                      "give --min-isolation instead")
