@@ -10,7 +10,8 @@ from typing import Any
 from .spec import Exercise
 
 #: The notebooks with exercises, by number (``nb02.py`` for ``"02"``).
-NOTEBOOKS = ("01", "02", "03", "04", "05", "06", "07", "08", "09", "10", "11", "12", "13", "14")
+NOTEBOOKS = ("01", "02", "03", "04", "05", "06", "07", "08", "09", "10", "11", "12", "13", "14",
+             "15", "16")
 
 
 def exercises(notebook: str) -> tuple[Exercise, ...]:
