@@ -292,11 +292,13 @@ async def _type_into_slider(page, slider, value: str) -> None:
     await readout.evaluate("e => e.blur()")  # no focus ring in the next shot
 
 
-# where the view, the rings picture and the warning are, from the DOM
+# where the view, the rings picture and the warning are in their output area, from the DOM
+# (relative to it: a scroll of the notebook between two readings moves nothing)
 BOXES = """(view) => {
   const out = view.closest('.jp-OutputArea-output');
+  const o = out.getBoundingClientRect();
   const r = (e) => { const b = e.getBoundingClientRect();
-    return [b.left, b.top, b.width, b.height].map(Math.round); };
+    return [b.left - o.left, b.top - o.top, b.width, b.height].map(Math.round); };
   const rings = [...out.querySelectorAll('.widget-image')].filter(e => !e.closest('.course-view'));
   const warning = [...out.querySelectorAll('.widget-html')].find(
     e => e.innerText.includes('Gimbal lock'));
