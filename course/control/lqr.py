@@ -245,15 +245,13 @@ def lqr_infinite_horizon(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike,
     iteration = 0
     for iteration in range(1, limit + 1):
         P_new, K = _riccati_step(P, a, b, q, r)
-        size = float(np.max(np.abs(P_new)))
-        if not np.isfinite(size) or size > DIVERGED:
+        step_change, P = _relative_change(P_new, P), P_new
+        if step_change is None:
             reason = (f"diverged: max |P| passed {DIVERGED:.0e} after {iteration} steps; no "
                       "gain keeps the cost finite ((A, B) not stabilisable on a mode Q "
                       "penalises, or the discount too close to 1 for it)")
-            P = P_new
             break
-        change = float(np.max(np.abs(P_new - P))) / max(1.0, size)
-        P = P_new
+        change = step_change
         if change <= tol:
             converged = True
             reason = f"converged: relative change of P {change:.1e} <= tol {tol:.0e}"
@@ -264,6 +262,15 @@ def lqr_infinite_horizon(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike,
                   "max_iterations)")
     return LQRResult(K=K, P=P, converged=converged, iterations=iteration, change=change,
                      spectral_radius=_radius(a, b, K), reason=reason)
+
+
+def _relative_change(new: Array, old: Array) -> float | None:
+    """``max |new - old| / max(1, max |new|)``, the stopping test of both infinite-horizon
+    iterations; None once ``new`` is not finite or passed :data:`DIVERGED`."""
+    size = float(np.max(np.abs(new)))
+    if not np.isfinite(size) or size > DIVERGED:
+        return None
+    return float(np.max(np.abs(new - old))) / max(1.0, size)
 
 
 def _radius(A: Array, B: Array, K: Array) -> float:
@@ -298,15 +305,13 @@ def _doubling(A: Array, B: Array, Q: Array, R: Array, tol: float,
         G = G + Ak @ np.linalg.solve(W, G) @ Ak.T
         Ak = Ak @ WA
         H_new = 0.5 * (H_new + H_new.T)
-        size = float(np.max(np.abs(H_new)))
-        if not np.isfinite(size) or size > DIVERGED:
+        step_change, H = _relative_change(H_new, H), H_new
+        if step_change is None:
             reason = (f"diverged: max |P| passed {DIVERGED:.0e} after {k} doubling steps "
                       "(2^k - 1 Riccati steps); no gain keeps the cost finite ((A, B) not "
                       "stabilisable on a mode Q penalises)")
-            H = H_new
             break
-        change = float(np.max(np.abs(H_new - H))) / max(1.0, size)
-        H = H_new
+        change = step_change
         if change <= tol:
             converged = True
             reason = (f"converged: relative change of P {change:.1e} <= tol {tol:.0e} after "
