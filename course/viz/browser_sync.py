@@ -9,6 +9,7 @@ from __future__ import annotations
 import asyncio
 import collections
 import time
+import weakref
 from collections.abc import Callable
 from typing import Any, Protocol
 
@@ -154,3 +155,55 @@ def send_changes_only(view: LocalView, render_window: object, draws: BrowserDraw
         draws.send_or_wait(send)
 
     view.update = update
+
+
+def keep_scene_arrays(view: LocalView) -> None:
+    """Keep, in the kernel, every data array of the scene a page of ``view``'s trame server
+    loads when it opens, however late it opens.
+
+    A page shows a scene in two steps: it reads the scene's state (a ``scene_<ref>`` entry of
+    the server's state, the arrays named by their hashes) and then fetches each array from
+    the kernel's cache. trame-vtk (2.11) drops from that cache, at every render of any view,
+    the arrays that nothing else holds and that were cached over 20 s ago, and the cell
+    arrays (converted on the way) are held by nothing else. So a page that fetches later,
+    e.g. a view far down a notebook run with "Run All" while the kernel was busy, or an
+    off-screen view the browser throttles, finds its arrays gone and never draws. Here the
+    arrays of every scene state on the server count as used at each such check: they stay
+    while a page can still ask for them, and an array no scene names any more goes as before
+    (the cache stays bounded)."""
+    helper: Any = view.module
+    protocol = getattr(helper, "_root_protocol", None)
+    server = view.server
+    if protocol is None or server in _KEPT:
+        return
+    for link in protocol.getLinkProtocols():
+        context = getattr(link, "context", None)
+        if context is not None and hasattr(context, "check_for_arrays_to_release"):
+            _KEPT.add(server)
+            _pin_scene_arrays(context, server.state)
+
+
+_KEPT: weakref.WeakSet[Any] = weakref.WeakSet()  # the trame servers whose caches keep scenes
+
+
+def _pin_scene_arrays(context: Any, state: Any) -> None:
+    """Wrap ``context.check_for_arrays_to_release`` (see :func:`keep_scene_arrays`)."""
+    from trame_vtk.modules.vtk.serializers import extract_array_hash
+
+    release = context.check_for_arrays_to_release
+    hashes: dict[str, tuple[int, list[str]]] = {}  # scene key -> (id of its state, hashes)
+
+    def check(time_window: float = 20, **kwargs: Any) -> None:
+        now = time.time()
+        for key, scene in state.to_dict().items():
+            if not (isinstance(key, str) and key.startswith("scene_") and scene):
+                continue
+            if key not in hashes or hashes[key][0] != id(scene):
+                hashes[key] = (id(scene), [e["hash"] for e in extract_array_hash(scene)])
+            for h in hashes[key][1]:
+                record = context.data_array_cache.get(h)
+                if record is not None:
+                    record["ts"] = now
+        release(time_window, **kwargs)
+
+    context.check_for_arrays_to_release = check

@@ -31,7 +31,7 @@ from .backend import (
     on_gl_thread,
     png_bytes,
 )
-from .browser_sync import BrowserDraws, send_changes_only
+from .browser_sync import BrowserDraws, keep_scene_arrays, send_changes_only
 
 if TYPE_CHECKING:
     import ipywidgets as widgets
@@ -210,6 +210,7 @@ class LiveView:
             self._live_servers.append(server)
         for local_view in getattr(viewer, "views", ()):
             if isinstance(local_view, PyVistaLocalView):
+                keep_scene_arrays(local_view)
                 send_changes_only(local_view, self.plotter.render_window, self._drawn)
                 self._browser_views.append(local_view)
                 # the vtk.js view says when it has drawn a change (playback waits for that)

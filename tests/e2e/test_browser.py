@@ -13,6 +13,7 @@ import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
+import nbformat
 import pytest
 from labkit import (
     REPO,
@@ -29,6 +30,14 @@ from labkit import (
 
 NOTEBOOK = Path(__file__).with_name("e2e_views.ipynb")
 DRAG_NOTEBOOK = Path(__file__).with_name("e2e_drag.ipynb")
+# a view, then a cell that keeps the kernel busy past trame-vtk's 20 s array cache, then a
+# second view (its render is when the cache drops what is older): the first view's page,
+# which could not load its arrays meanwhile, must still draw (course.viz.browser_sync)
+LATE_NOTEBOOK = "e2e_late.ipynb"
+LATE_CELLS = ["from course.skeleton import chain\nfrom course.viz import fk_explorer\n"
+              "fk_explorer(chain([1.0, 0.8, 0.5], axes=[0, 0, 1]))",
+              "import time\ntime.sleep(25)",
+              "fk_explorer(chain([1.0, 0.5], axes=[0, 0, 1]))"]
 ARTIFACTS = REPO / "test-artifacts"
 
 
@@ -51,12 +60,16 @@ def lab(request, tmp_path_factory):
     root = tmp_path_factory.mktemp("lab")
     for notebook in (NOTEBOOK, DRAG_NOTEBOOK):
         shutil.copy(notebook, root / notebook.name)
+    late = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in LATE_CELLS])
+    late.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
+                                   "language": "python"}
+    nbformat.write(late, root / LATE_NOTEBOOK)
     with lab_server(root, {"PYVISTA_JUPYTER_BACKEND": request.param}) as base:
         yield base, request.param
 
 
 @contextmanager
-def _notebook_page(base: str, notebook: Path, artifact: str):
+def _notebook_page(base: str, notebook: Path | str, artifact: str):
     """A headless Chromium page on ``notebook`` in the served Lab, all its cells run; on a
     failure the page is saved as ``test-artifacts/<artifact>_failure.png``."""
     from playwright.sync_api import sync_playwright
@@ -66,7 +79,7 @@ def _notebook_page(base: str, notebook: Path, artifact: str):
         browser = launch_browser(p)
         page = new_page(browser)  # (its probe counts the WebGL draws in the view's iframe)
         try:
-            run_all(page, f"{base}/lab/tree/{notebook.name}?reset&token={TOKEN}")
+            run_all(page, f"{base}/lab/tree/{Path(notebook).name}?reset&token={TOKEN}")
             yield page
         except Exception:
             page.screenshot(path=str(ARTIFACTS / f"{artifact}_failure.png"), full_page=True)
@@ -210,3 +223,22 @@ def test_dragging_the_pad_moves_the_target_in_the_client_view(lab):
     assert after != before, "dragging the pad did not move the target sliders"
     assert image_after != image_before, "the 3D view did not change"
     assert draws_after > draws_before, "vtk.js drew nothing after the target moved"
+
+
+@pytest.mark.parametrize("lab", ["client"], indirect=True)
+def test_a_view_shown_before_a_long_cell_still_draws(lab):
+    """Run All: a view's page cannot fetch its scene while the kernel runs the next cells;
+    once they end (25 s later, beyond the 20 s trame-vtk keeps arrays) it still draws."""
+    base, _ = lab
+    with _notebook_page(base, LATE_NOTEBOOK, "e2e_late") as page:
+        frames = page.locator(".course-view iframe")
+        frames.nth(1).wait_for(state="attached", timeout=60_000)
+        for k in range(2):
+            view = frames.nth(k)
+            view.scroll_into_view_if_needed()
+            try:
+                webgl_drawn(view.element_handle().content_frame(), 30_000)
+            except Exception:
+                view.screenshot(path=str(ARTIFACTS / f"e2e_late_view{k}_never_drawn.png"))
+                raise AssertionError(f"view {k} never drew: its page found its arrays gone"
+                                     ) from None

@@ -38,6 +38,7 @@ from __future__ import annotations
 import asyncio
 import html
 import io
+import json
 import os
 import re
 import shutil
@@ -249,9 +250,30 @@ async def _live_problems(view) -> list[str]:
         else:
             await frame.wait_for_function(STREAM_SHOWN, timeout=60_000)
     except Exception:
-        return ["vtk.js never drew in the view's iframe (a spinner is not a picture)" if client
-                else "no rendered image reached the view's iframe (a spinner is not a picture)"]
+        return [("vtk.js never drew in the view's iframe (a spinner is not a picture)" if client
+                 else "no rendered image reached the view's iframe (a spinner is not a picture)")
+                + f"; the iframe: {await _frame_state(frame)}"]
     return []
+
+
+# what a view's iframe holds when it shows no picture: enough to tell a page that never
+# loaded from a scene that never arrived or a canvas with no size
+FRAME_STATE = """() => {
+  const c = document.querySelector('canvas');
+  return {url: location.href, ready: document.readyState, canvases:
+          document.querySelectorAll('canvas').length,
+          canvas: c ? [c.width, c.height, c.clientWidth, c.clientHeight] : null,
+          window: [innerWidth, innerHeight], webgl: window.__webgl ?? null,
+          frames: (window.__frames || []).length,
+          text: (document.body?.innerText || '').trim().slice(0, 160)};
+}"""
+
+
+async def _frame_state(frame) -> str:
+    try:
+        return json.dumps(await frame.evaluate(FRAME_STATE))
+    except Exception as exc:  # a detached or crashed frame says so
+        return f"unreadable ({type(exc).__name__}: {str(exc)[:160]})"
 
 
 async def _shoot(page, view, shots: list[Shot], notebook: str, size, k: int,
