@@ -484,6 +484,51 @@ def test_full_body_ik_drag_moves_the_edited_target(sample_motion):
         fb.close()
 
 
+def test_full_body_ik_shows_a_long_solve_at_once_then_its_end(shared_bvh_dir, monkeypatch):
+    """A press answers at once with the pose after PREVIEW_ITERATIONS; once the kernel has
+    sent that picture the same solve runs to its end (the uninterrupted solve's pose, to the
+    bit); a newer press makes the unfinished one moot, and reading ``result`` finishes it."""
+    import course.ik
+    from course.viz import full_body_ik_view
+
+    later: list = []
+    monkeypatch.setattr(full_body_ik_view, "soon", later.append)
+    from course.bvh import load_bvh
+
+    walk = load_bvh(shared_bvh_dir / "cmu_12_01_walk.bvh")  # notebook 06's view
+    fb = viz.full_body_ik(walk, 0, root="LowerBack", method="fabrik",
+                          effectors=["LeftHandIndex1_end", "RightHandIndex1_end"])
+    try:
+        later.clear()
+        fb._finish()
+        name = fb.sliders["edit"].value
+        y = fb.sliders["y"]
+        y.value = y.value + 16 * y.step  # 16 presses up: near the arm's reach, FABRIK crawls
+        assert len(later) == 1 and "solving" in fb.readout.value, fb.readout.value
+        preview = fb._result
+        assert preview.iterations == fb.PREVIEW_ITERATIONS and not preview.converged
+        np.testing.assert_array_equal(fb.scene.skeleton("IK").positions, preview.positions)
+        later.pop()()  # the kernel sent the preview: the solve runs to its end
+        full = course.ik.solve(fb.skeleton, fb.local, fb.root_position,
+                               {e: fb.targets[e] for e in fb.sliders["effectors"].value},
+                               method="fabrik", root="LowerBack")
+        assert full.iterations > fb.PREVIEW_ITERATIONS
+        np.testing.assert_array_equal(fb.result.positions, full.positions)
+        np.testing.assert_array_equal(fb.scene.skeleton("IK").positions, full.positions)
+        assert "solving" not in fb.readout.value and "residual" in fb.readout.value
+
+        y.value = y.value + y.step
+        stale = later.pop()
+        y.value = y.value + y.step  # latest wins
+        stale()  # the older press's remainder: nothing runs, nothing is drawn
+        assert "solving" in fb.readout.value
+        final = fb.result  # reading the result finishes the newest solve
+        assert "solving" not in fb.readout.value
+        assert np.linalg.norm(final.positions[fb.skeleton.index(name)] - fb.targets[name]) < 0.1
+    finally:
+        fb.close()
+
+
 def test_full_body_ik_pulls_an_inner_joint(sample_motion):
     """Not only tips: the hand (not the hand's End Site) can be an effector, rooted at a foot."""
     fb = viz.full_body_ik(sample_motion, 10, root="LeftFoot", effectors=["LeftHand"])

@@ -3,13 +3,15 @@ targets; the solution beside the captured pose."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import ipywidgets as widgets
 import numpy as np
 
 from .._typing import Array
+from .backend import call_later, soon
 from .panel import (
     Control,
     clipped_to_sliders,
@@ -51,6 +53,10 @@ class FullBodyIK(Control):
     PAD_SIZE = 120  # px: the drag pad, under the sliders
     VIEW_BASIS = 520  # px: the view's width before it grows (up to its 640 px window)
     STALE_OPACITY = 0.3  # the IK skeleton while it shows a pose that is not the setting's
+    # a solve not done after these many iterations shows its pose at once (a few ms of FABRIK
+    # on the CMU body), then runs to its end: the view answers a key press without waiting
+    # for a solve that crawls near the reach (up to 200 iterations, ~0.4 s)
+    PREVIEW_ITERATIONS = 8
 
     def __init__(self, motion: Any, frame: int = 0, *, root: str | None = None,
                  effectors: Sequence[str] | None = None, method: str | None = None) -> None:
@@ -90,6 +96,8 @@ class FullBodyIK(Control):
         }
         self.readout = readout_box(4, f"{self.PANEL_WIDTH}px")
         self.stale = False
+        self._result: Any = None  # the current setting's IKResult (see result)
+        self._pending: Callable[[], None] | None = None  # the rest of an unfinished solve
         self.scene = SkeletonScene(window_size=(640, 520))
         corners = np.stack(np.meshgrid(*box.T, indexing="ij"), axis=-1).reshape(-1, 3)
         self.scene.add_skeleton(sk.parents, self.positions, name="captured", color=GHOST,
@@ -190,31 +198,77 @@ class FullBodyIK(Control):
         self.solve()
 
     def solve(self) -> None:
-        import course.ik
-
+        """Solve for the current setting. A solve still running after ``PREVIEW_ITERATIONS``
+        shows that pose at once and finishes once it is on the screen (the same solve run to
+        its end, so the final pose is the uninterrupted solve's); a newer setting makes the
+        unfinished one moot (latest wins), and reading :attr:`result` finishes it."""
         chosen = list(self.sliders["effectors"].value)
         targets = {e: self.targets[e] for e in chosen}
+        self._pending = None
         try:
-            self.result = course.ik.solve(
-                self.skeleton, self.local, self.root_position, targets,
-                method=self.sliders["method"].value, root=self.sliders["root"].value,
-            )
+            first = self._solve(targets, self.PREVIEW_ITERATIONS)
         except ValueError as err:  # e.g. an effector on the root's side: say why
             self._mark_stale(True)
             self.readout.value = (
                 f"<span style='color:#a4161a'>{err}</span><br><i style='color:#6b7480'>the "
                 "view shows the last solved pose (dimmed), not this setting</i>")
             return
+        if first.converged or first.reason != "max_iterations":  # done within the preview
+            self._show(first, targets)
+            return
+        self._show(first, targets, solving=True)
+
+        def finish() -> None:
+            self._show(self._solve(targets), targets)
+
+        self._pending = finish
+        asked = time.monotonic()
+        soon(lambda: self._when_shown(finish, asked))
+
+    def _solve(self, targets: Mapping[str | int, Array], max_iter: int | None = None) -> Any:
+        import course.ik
+
+        return course.ik.solve(self.skeleton, self.local, self.root_position, targets,
+                               method=self.sliders["method"].value,
+                               root=self.sliders["root"].value, max_iter=max_iter)
+
+    def _when_shown(self, pending: Callable[[], None], asked: float) -> None:
+        """Finish ``pending`` once the preview is on the student's screen: a browser-drawn
+        view fetches the picture's arrays from the kernel, which a solve would hold up (one
+        that never answers is waited for 1 s at most)."""
+        if pending is not self._pending:
+            return
+        if self.scene.pictures_in_flight() and time.monotonic() - asked < 1.0:
+            call_later(0.002, lambda: self._when_shown(pending, asked))
+            return
+        self._finish(pending)
+
+    def _finish(self, pending: Callable[[], None] | None = None) -> None:
+        """Run the pending solve to its end (only ``pending``, if given: a newer one
+        replaced an older)."""
+        if self._pending is not None and (pending is None or pending is self._pending):
+            finish, self._pending = self._pending, None
+            finish()
+
+    @property
+    def result(self) -> Any:
+        """The :class:`~course.ik.IKResult` of the current setting (finished if pending)."""
+        self._finish()
+        return self._result
+
+    def _show(self, r: Any, targets: dict[str, Array], *, solving: bool = False) -> None:
+        self._result = r
         self._mark_stale(False, render=False)
         self.scene.set_targets(np.array(list(targets.values())) if targets
                                else np.empty((0, 3)), render=False)
-        self.scene.set_pose(self.result.positions, name="IK")
-        r = self.result
+        self.scene.set_pose(r.positions, name="IK")
         residual = np.asarray(r.residuals, dtype=np.float64)
+        state = (f"solving… ({iterations(int(r.iterations))} so far)" if solving else
+                 "converged" if r.converged else f"not converged ({r.reason})")
         self.readout.value = (
-            f"root <b>{self.sliders['root'].value}</b>, {len(chosen)} effector(s): "
-            f"{'converged' if r.converged else f'not converged ({r.reason})'}, "
-            f"{iterations(int(r.iterations))}, residual {residual[-1]:.2e}"
+            f"root <b>{self.sliders['root'].value}</b>, {len(targets)} effector(s): "
+            f"{state}{'' if solving else ', ' + iterations(int(r.iterations))}, "
+            f"residual {residual[-1]:.2e}"
         )
 
     def _pad_caption(self) -> str:
