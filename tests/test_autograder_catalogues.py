@@ -1,4 +1,4 @@
-"""What every assignment autograder a2–a6 promises, checked the same way for each: the
+"""What every assignment autograder a2–a8 promises, checked the same way for each: the
 reference scores full marks, the untouched template scores nothing and says "not implemented",
 the catalogue of mistakes and the mutant fixtures match one to one, and each mutant is
 diagnosed by name on the functions it breaks and nowhere else."""
@@ -30,12 +30,14 @@ TEMPLATES = {
     "a4": "a4_character.py",
     "a5": "a5_animation.py",
     "a6": "a6_physics.py",
+    "a7": "a7_walking.py",
+    "a8": "a8_optimal_control.py",
 }
 #: (score, max score, bonus) of the reference, hidden tests included
 REFERENCE_SCORES = {"a2": (13, 11, 2), "a3": (20, 18, 2), "a4": (13, 13, 0), "a5": (14, 14, 0),
-                    "a6": (16, 16, 0)}
+                    "a6": (16, 16, 0), "a7": (14, 14, 0), "a8": (15, 15, 0)}
 #: the fewest own mistakes each catalogue names
-OWN_MISTAKES = {"a2": 8, "a3": 12, "a4": 6, "a5": 7, "a6": 14}
+OWN_MISTAKES = {"a2": 8, "a3": 12, "a4": 6, "a5": 7, "a6": 14, "a7": 12, "a8": 12}
 KEYS = sorted(TEMPLATES)
 
 

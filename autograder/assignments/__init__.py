@@ -13,7 +13,7 @@ from importlib import import_module
 from ..catalogue import shared_misconceptions
 from ..spec import Assignment
 
-KEYS = ("a1", "a2", "a3", "a4", "a5", "a6")
+KEYS = ("a1", "a2", "a3", "a4", "a5", "a6", "a7", "a8")
 
 
 @cache

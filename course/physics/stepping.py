@@ -35,11 +35,12 @@ off, the comparison), :func:`largest_push` bisects the push it survives as
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._typing import Array
 from .._validate import as_count, as_positive
@@ -117,12 +118,22 @@ class CaptureStep(Controller):
         Steps allowed in one run.
     gait : Gait, optional
         The step's timing, targets and gains; default :data:`STEP_GAIT`.
+    capture_point : callable, optional
+        The capture point in place of :func:`~course.physics.lip.capture_point`:
+        ``capture_point(com, com_velocity, ground_height, gravity) -> (x, z)`` with the COM
+        and its velocity as y-up meters ``(3,)`` and the floor's height, returning the point
+        on the ground (y-up ``(x, z)``), as assignment a7's ``capture_point``. The step's
+        target is then that point ``lead`` s ahead, :math:`p + (\\xi - p)e^{\\omega_0 t}`.
+        ``None``: the library's.
     """
 
     def __init__(self, character: Character, *, stepping: bool = True, kp: float = 1000.0,
                  com_kp: float = 1000.0, com_kd: float = 200.0, margin: float = 0.02,
-                 max_steps: int = 4, gait: Gait | None = None) -> None:
+                 max_steps: int = 4, gait: Gait | None = None,
+                 capture_point: Callable[[Array, Array, float, float], ArrayLike]
+                 | None = None) -> None:
         self.character = character
+        self.capture_hook = capture_point
         self.stepping = bool(stepping)
         self.kp = as_positive(kp, "kp")
         self.com_kp = as_positive(com_kp, "com_kp", allow_zero=True)
@@ -208,8 +219,17 @@ class CaptureStep(Controller):
     def capture(self, sim: Simulation) -> Array:
         """The capture point now, z-up ground-plane ``(x, y)``."""
         c, v, w = self._state(sim)
+        if self.capture_hook is not None:
+            return self._hooked(c, v)
         out: Array = capture_point(c[:2], v[:2], w)
         return out
+
+    def _hooked(self, c: Array, v: Array) -> Array:
+        """The ``capture_point`` hook's point, z-up ``(x, y)``, from the z-up COM state."""
+        assert self.capture_hook is not None
+        to_y = Y_TO_Z_MATRIX.T
+        xz = np.asarray(self.capture_hook(to_y @ c, to_y @ v, self._floor, G), dtype=float)
+        return np.array([xz[0], -xz[1]])
 
     def support(self, sim: Simulation) -> Array:
         """Convex hull (z-up ``(x, y)``) of both feet's joints (ankle, toe, tip)."""
@@ -253,7 +273,10 @@ class CaptureStep(Controller):
         c, v, w = self._state(sim)
         data = sim.data
         p = 0.5 * (data.xpos[stance.foot][:2] + data.xpos[stance.toe_body][:2])
-        xi = capture_point_at(self.lead, c[:2], v[:2], p, w)
+        if self.capture_hook is None:
+            xi = capture_point_at(self.lead, c[:2], v[:2], p, w)
+        else:
+            xi = p + (self._hooked(c, v) - p) * math.exp(w * self.lead)
         step = xi - p
         length = float(np.linalg.norm(step))
         if length > self.max_step:

@@ -452,6 +452,13 @@ class SIMBICON(Controller):
     turn_rate : float
         rad/s: the heading the controller uses turns towards :attr:`heading` at most this
         fast (a new heading all at once would twist the stance foot off the ground).
+    feedback : callable, optional
+        The sagittal feedback in place of the built-in law: ``feedback(theta_d0, c_d, c_v,
+        com, com_velocity, stance_ankle, heading) -> theta_d`` with the COM, its velocity
+        (less the speed input along the heading, if any) and the stance ankle as y-up
+        meters ``(3,)`` and the heading in use (radians), as assignment a7's
+        ``swing_hip_target`` (:meth:`placement` clamps what it returns). ``None``: the law
+        of :meth:`placement`.
 
     Attributes
     ----------
@@ -467,8 +474,11 @@ class SIMBICON(Controller):
 
     def __init__(self, character: Character, gait: Gait | None = None, *,
                  speed: float | None = None, heading: float = 0.0,
-                 stance: str = "left", turn_rate: float = 0.4) -> None:
+                 stance: str = "left", turn_rate: float = 0.4,
+                 feedback: Callable[[float, float, float, Array, Array, Array, float], float]
+                 | None = None) -> None:
         self.character = character
+        self.feedback = feedback
         self.gait = Gait() if gait is None else gait
         if not isinstance(self.gait, Gait):
             raise ValueError(f"gait: a Gait, got {type(gait).__name__}")
@@ -650,7 +660,14 @@ class SIMBICON(Controller):
         rel = com - data.xpos[stance.foot]
         out = self.left_axis if swing.side == "left" else -self.left_axis
         v_fwd = float(vel @ self.forward_axis) - (self.speed if self.speed is not None else 0.0)
-        theta = g.swing_hip[k] + g.c_d * float(rel @ self.forward_axis) + g.c_v * v_fwd
+        if self.feedback is None:
+            theta = g.swing_hip[k] + g.c_d * float(rel @ self.forward_axis) + g.c_v * v_fwd
+        else:  # in the course's y-up frame: (x, z, -y) of MuJoCo's z-up (x, y, z)
+            lag = vel - (self.speed or 0.0) * self.forward_axis
+            to_y = Y_TO_Z_MATRIX.T
+            theta = float(self.feedback(
+                g.swing_hip[k], g.c_d, g.c_v, to_y @ com, to_y @ lag,
+                to_y @ data.xpos[stance.foot], self._heading))
         phi = g.swing_hip_out[k] + g.c_d_coronal * float(rel @ out) + g.c_v_coronal * float(
             vel @ out)
         theta = min(max(theta, g.hip_range[0]), g.hip_range[1])
