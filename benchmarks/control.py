@@ -1,9 +1,14 @@
 """course.control measured: policy-gradient training time and % of LQR's cost, the REINFORCE
 estimator's bias (in standard errors) and the variance each baseline saves, value iteration
 against LQR as the grid is refined, the iLQR swing-up, and the Riccati iteration against
-scipy's DARE solver — the figures docs/control.md quotes.
+scipy's DARE solver, and the LQR balance of the standing CMU character against notebook 14's
+controllers on the same pushes — the figures docs/control.md quotes.
 
-Run:  .venv/bin/python benchmarks/control.py [--seeds 3] [--skip-vi]
+Run:  .venv/bin/python benchmarks/control.py [--seeds 3] [--skip-vi] [--skip-character]
+
+The character's pushes follow benchmarks/physics_balance.py (0.1 s on the root from 0.25 s,
+standing 1.5 s after it, bisection to 5 N, torque limit 400 N m, h = 1/600 s; a diverged run
+counts as a fall); the CMU clip comes from $COURSE_DATA_DIR or ../shared/data/bvh.
 
 On one core: BLAS is held to one thread (set before numpy loads) and nothing here runs in
 parallel. Wall times are ``time.perf_counter`` around each call, on whatever else the
@@ -174,11 +179,68 @@ def riccati(problems: int) -> None:
               f"{1e3 * seconds:7.1f} ms ({result.reason})")
 
 
+DIRECTIONS = {"forward": (0.0, 0.0, 1.0), "backward": (0.0, 0.0, -1.0),
+              "sideways": (1.0, 0.0, 0.0)}
+
+
+def character_lqr() -> tuple[float, float] | None:
+    """The LQR balance of the CMU character (course.physics.lqr_balance) beside ``none``,
+    ``ankle`` and ``com`` on the same pushes; (LQR, com) forward in N s, or None without the
+    clip."""
+    from pathlib import Path
+
+    import mujoco  # type: ignore[import-untyped]
+
+    from course.bvh import load_bvh
+    from course.physics.balance import CONTROLLERS, largest_push, standing_pose
+    from course.physics.character import build_model
+    from course.physics.lqr_balance import design, lqr_largest_push, lqr_stand, survived
+
+    env = os.environ.get("COURSE_DATA_DIR")
+    base = Path(env) if env else Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh"
+    path = base / "cmu_12_01_walk.bvh"
+    if not path.exists():
+        print(f"\n== LQR balance of the character: CMU clip not found at {path}, skipped")
+        return None
+    mujoco.set_mju_user_warning(lambda message: None)  # diverged runs are counted, not logged
+    character = build_model(load_bvh(path).skeleton)
+    start = time.perf_counter()
+    lqr = design(character)
+    seconds = time.perf_counter() - start
+    eq = lqr.equilibrium
+    print(f"\n== LQR balance, CMU character ({character.total_mass:.1f} kg, nv = "
+          f"{character.model.nv}, {lqr.B.shape[1]} torques): design {seconds:.1f} s")
+    print(f"  tutorial height search: {1e3 * eq.tutorial_height:.3f} mm leaves root "
+          f"{np.array2string(eq.tutorial_root_force, precision=3)} (N, N m)")
+    print(f"  with the tilt: {1e3 * eq.height:.3f} mm, tilt "
+          f"{np.array2string(1e3 * eq.tilt, precision=3)} mrad, root residual "
+          f"{np.abs(eq.root_force).max():.1e}; spectral radius of A - BK "
+          f"{lqr.spectral_radius:.10f}, max |K| {np.abs(lqr.K).max():.1f}")
+    run = lqr_stand(character, lqr, duration=3.0)
+    print(f"  unpushed 3 s: standing {survived(run)}, COM moved "
+          f"{1e3 * np.linalg.norm(run.com[-1] - run.com[0]):.3f} mm, max |root force| "
+          f"{np.abs(run.torques[:, :6]).max()}, {run.sim_time / run.wall_time:.1f} s/s")
+    pose = standing_pose(character)
+    print("  largest push (N, 0.1 s; impulse N s in brackets):")
+    names = (*CONTROLLERS, "lqr")
+    print(f"  {'direction':10s}" + "".join(f"{c:>18s}" for c in names))
+    found: dict[str, dict[str, float]] = {}
+    for label, d in DIRECTIONS.items():
+        forces = {c: largest_push(character, pose, controller=c, direction=d)
+                  for c in CONTROLLERS}
+        forces["lqr"] = lqr_largest_push(character, lqr, direction=d)
+        found[label] = forces
+        print(f"  {label:10s}" + "".join(f"{forces[c]:9.1f} ({0.1 * forces[c]:5.2f})"
+                                        for c in names))
+    return 0.1 * found["forward"]["lqr"], 0.1 * found["forward"]["com"]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--batches", type=int, default=400)
     parser.add_argument("--skip-vi", action="store_true")
+    parser.add_argument("--skip-character", action="store_true")
     args = parser.parse_args()
     percent, seconds = training(args.seeds)
     estimator(args.batches)
@@ -186,10 +248,13 @@ def main() -> None:
         dynamic_programming()
     ilqr()
     riccati(100)
-    # The issue's line also names the LQR-balanced character's pushes; that controller is not
-    # built yet (docs/control.md, "What remains"), so only the measured half is printed.
-    print(f"control: policy gradient reaches {percent:.1f}% of LQR cost in {seconds:.2f} s on "
-          "1 core (double integrator, seed 0); LQR standing of the character: not built")
+    pushes = None if args.skip_character else character_lqr()
+    # One-leg standing is not built (docs/control.md, "LQR balance of the character").
+    standing = ("LQR standing: not measured" if pushes is None else
+                f"LQR standing survives {pushes[0]:.2f} N s (com controller {pushes[1]:.2f} N s, "
+                "forward), one-leg not built")
+    print(f"control: {standing}; policy gradient reaches {percent:.1f}% of LQR cost in "
+          f"{seconds:.2f} s on 1 core (double integrator, seed 0)")
 
 
 if __name__ == "__main__":
