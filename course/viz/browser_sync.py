@@ -168,26 +168,34 @@ def keep_scene_arrays(view: LocalView) -> None:
     arrays (converted on the way) are held by nothing else. So a page that fetches later,
     e.g. a view far down a notebook run with "Run All" while the kernel was busy, or an
     off-screen view the browser throttles, finds its arrays gone and never draws. Here the
-    arrays of every scene state on the server count as used at each such check: they stay
+    arrays of the scene states of the views passed count as used at each such check: they stay
     while a page can still ask for them, and an array no scene names any more goes as before
     (the cache stays bounded)."""
-    helper: Any = view.module
-    protocol = getattr(helper, "_root_protocol", None)
-    server = view.server
-    if protocol is None or server in _KEPT:
+    # the state entry trame-vtk's VtkLocalView keeps its scene in ("scene_<ref>")
+    key = getattr(view, "_VtkLocalView__scene_id", None)
+    protocol = getattr(view.module, "_root_protocol", None)
+    if key is None or protocol is None:
         return
-    for link in protocol.getLinkProtocols():
-        context = getattr(link, "context", None)
-        if context is not None and hasattr(context, "check_for_arrays_to_release"):
-            _KEPT.add(server)
-            _pin_scene_arrays(context, server.state)
+    server = view.server
+    if server not in _SCENES:
+        for link in protocol.getLinkProtocols():
+            context = getattr(link, "context", None)
+            if context is not None and hasattr(context, "check_for_arrays_to_release"):
+                _SCENES[server] = set()
+                _pin_scene_arrays(context, server.state, _SCENES[server])
+    if server in _SCENES:
+        _SCENES[server].add(key)
 
 
-_KEPT: weakref.WeakSet[Any] = weakref.WeakSet()  # the trame servers whose caches keep scenes
+# the trame servers whose array caches keep scenes, and the state entries of those scenes
+_SCENES: weakref.WeakKeyDictionary[Any, set[str]] = weakref.WeakKeyDictionary()
 
 
-def _pin_scene_arrays(context: Any, state: Any) -> None:
-    """Wrap ``context.check_for_arrays_to_release`` (see :func:`keep_scene_arrays`)."""
+def _pin_scene_arrays(context: Any, state: Any, keys: set[str]) -> None:
+    """Wrap ``context.check_for_arrays_to_release`` (see :func:`keep_scene_arrays`): the
+    arrays of the scenes in ``state`` under ``keys`` count as used now. (Read entry by
+    entry: ``state.to_dict()`` would flush, sending whole scenes to pages that take only
+    changes, see :func:`send_changes_only`.)"""
     from trame_vtk.modules.vtk.serializers import extract_array_hash
 
     release = context.check_for_arrays_to_release
@@ -195,8 +203,9 @@ def _pin_scene_arrays(context: Any, state: Any) -> None:
 
     def check(time_window: float = 20, **kwargs: Any) -> None:
         now = time.time()
-        for key, scene in state.to_dict().items():
-            if not (isinstance(key, str) and key.startswith("scene_") and scene):
+        for key in keys:
+            scene = state[key]
+            if not scene:
                 continue
             if key not in hashes or hashes[key][0] != id(scene):
                 hashes[key] = (id(scene), [e["hash"] for e in extract_array_hash(scene)])
