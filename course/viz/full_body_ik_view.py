@@ -56,10 +56,13 @@ class FullBodyIK(Control):
     # a solve not done after these many iterations shows its pose at once (a few ms of FABRIK
     # on the CMU body), then runs to its end: the view answers a key press without waiting
     # for a solve that crawls near the reach (up to 200 iterations, ~0.4 s)
-    PREVIEW_ITERATIONS = 8
+    PREVIEW_ITERATIONS = 2
 
     def __init__(self, motion: Any, frame: int = 0, *, root: str | None = None,
                  effectors: Sequence[str] | None = None, method: str | None = None) -> None:
+        """The view of ``motion``'s ``frame``: ``root`` stays put (default joint 0), the
+        ``effectors`` (default the first two hands or feet) start on their joints, and
+        ``method`` names the solver (default DLS where available)."""
         sk = motion.skeleton
         self.skeleton = sk
         self.local = np.array(motion.local_rotations[frame])
