@@ -15,8 +15,10 @@ Standing with and without stepping (the neutral pose, ``stepping.stand_and_step`
 its controllers "none", "ankle", "com"): from 0.25 s, 1.5 s later, as docs/physics.md
 measures them. Walking figures are bisections to ``--tol`` N; standing ones are scans (every
 force ``tol``, ``2 tol``, ... survived up to the figure, the next one falls), because standing
-survival is not monotonic either (stepping survives a 100 N backward push, falls at 110-120
-and survives 130-150; the bisection finds 175, an isolated survivor; it is printed beside).
+survival is not monotonic either (the first version of stepping survived a 100 N backward
+push, fell at 110-120 and survived 130-150; its bisection found 175, an isolated survivor;
+the bisection is printed beside). Stepping is ``stand_and_step``'s default,
+``stepping.RECOVERY``.
 Directions are y-up: +z forward, +x the character's left. The last line printed is the
 summary; each push figure there is the smallest impulse over the four directions (what it
 survives from any side). The CMU clip comes from $COURSE_DATA_DIR or ../shared/data/bvh.

@@ -21,11 +21,18 @@ its capture point when a push moves the capture point outside its feet.
     foot for a push to the left; for a push straight forward or back, the foot whose side the
     capture point is on). Its placement, recomputed on every step, is the capture point at the
     expected touch-down, :math:`\xi(t) = p + (\xi_0 - p)e^{\omega_0 t}` with :math:`p` the
-    stance foot (:func:`course.physics.lip.capture_point_at`), turned into the swing thigh's
-    world angles by the geometry of the leg (hip to target ankle); the foot's centre, not its
-    heel, goes there. After touch-down it stands again on both feet, the COM target the new
-    feet's centre and the joint targets the pose it landed in; another step follows if the
-    capture point is still outside.
+    stance foot (:func:`course.physics.lip.capture_point_at`, ``lead`` s ahead) plus
+    ``offset`` beyond it along the step, so the COM comes back over the feet; it is
+    turned into the swing thigh's world angles by the geometry of the leg (hip to target
+    ankle), the thigh's aim corrected by the knee's bend (hip-to-knee against hip-to-ankle,
+    at most ``knee_bend``: without it the bent knee lands the foot up to 17 cm
+    behind its target); the foot's centre, not its heel, goes there. After touch-down it
+    stands again on both feet, the COM target the new feet's centre with ``landed_com_gains``
+    (softer ones: the standing gains overshoot a wide stance into the next fall) and the
+    joint targets the pose it landed in; another step follows if the capture point is still
+    outside (up to ``max_steps``). :data:`RECOVERY` is the setting :func:`stand_and_step`
+    uses (0.2 s, 4 cm, 0.3 rad, 400 / 150, 12 steps); :class:`CaptureStep`'s own defaults
+    are the first version's (0.1 s, 0, 0, the standing gains, 4 steps).
 
 :func:`stand_and_step` runs it (``stepping=False``: the same balance with the step switched
 off, the comparison), :func:`largest_push` bisects the push it survives as
@@ -57,6 +64,15 @@ from .zmp import convex_hull, polygon_distance
 STEP_GAIT = Gait(lift_time=0.1, first_lift_time=0.1, max_swing_time=0.8,
                  swing_knee=(1.2, 0.1), stance_knee=(0.05, 0.05), yaw_gain=0.3,
                  hip_range=(-0.8, 0.9), hip_out_range=(-0.35, 0.6), ramp_time=0.12)
+
+
+#: The recovery :func:`stand_and_step` and :func:`largest_push` use (their ``options``
+#: override it): step as soon as the capture point leaves the feet, up to 12 steps, aim 0.2 s
+#: ahead and 4 cm beyond it, the thigh's aim corrected for the knee's bend, softer COM gains
+#: after a step. Measured against :class:`CaptureStep`'s defaults in
+#: ``docs/walking_control.md`` (every 10 N up to 160 N backward instead of 100 N).
+RECOVERY: dict[str, Any] = {"margin": 0.0, "max_steps": 12, "lead": 0.2, "offset": 0.04,
+                            "knee_bend": 0.3, "landed_com_gains": (400.0, 150.0)}
 
 
 class _Stepper(SIMBICON):
@@ -92,6 +108,17 @@ class _Stepper(SIMBICON):
         n0, n1 = owner.neutral_angles[swing.side]
         theta = math.atan2(float(u @ self.forward_axis), drop) - n0
         phi = math.atan2(float(u @ out), drop) - n1
+        if owner.knee_bend > 0.0:  # aim the leg (hip to ankle), not the thigh, at the target
+            data = sim.data
+            hip = data.xpos[swing.thigh]
+            thigh, leg = data.xpos[swing.shin] - hip, data.xpos[swing.foot] - hip
+            bends = []
+            for axis in (self.forward_axis, out):  # the knee's bend between the two, clamped
+                bend = (math.atan2(float(thigh @ axis), max(-float(thigh[2]), 1e-3))
+                        - math.atan2(float(leg @ axis), max(-float(leg[2]), 1e-3)))
+                bends.append(min(max(bend, -owner.knee_bend), owner.knee_bend))
+            theta += bends[0]
+            phi += bends[1]
         if self.phase == "lift":
             theta += owner.lift_extra
         g = self.gait
@@ -113,7 +140,8 @@ class CaptureStep(Controller):
     com_kp, com_kd : float
         The standing balance's COM gains (N/m, N s/m), as notebook 14's ``"com"``.
     margin : float
-        How far (m) the capture point must be outside the widened support polygon to step.
+        How far (m) the capture point must be outside the widened support polygon to step
+        (0: as soon as it leaves it).
     max_steps : int
         Steps allowed in one run.
     gait : Gait, optional
@@ -125,13 +153,30 @@ class CaptureStep(Controller):
         on the ground (y-up ``(x, z)``), as assignment a7's ``capture_point``. The step's
         target is then that point ``lead`` s ahead, :math:`p + (\\xi - p)e^{\\omega_0 t}`.
         ``None``: the library's.
+    lead : float
+        s: the step aims at the capture point this far ahead (the swing's lag).
+    offset : float
+        m: the foot lands this far beyond the capture point, along the step.
+    knee_bend : float
+        rad: the most the swing thigh's aim is corrected for the knee's bend (0: aim the
+        thigh itself at the target, as the first version did).
+    landed_com_gains : (float, float), optional
+        COM kp (N/m) and kd (N s/m) of the balance after a step; default ``com_kp, com_kd``.
+
+    The defaults are the first version's (assignment a7 grades with them);
+    :func:`stand_and_step` and :func:`largest_push` use :data:`RECOVERY`, which survives
+    twice the push judged 2 s after it, 1.5× judged 4 s after (``docs/walking_control.md``).
+    Further attributes: ``max_step`` (m, 0.55), ``max_lift`` (s, 0.35), ``lift_extra`` (rad,
+    0.25).
     """
 
     def __init__(self, character: Character, *, stepping: bool = True, kp: float = 1000.0,
                  com_kp: float = 1000.0, com_kd: float = 200.0, margin: float = 0.02,
                  max_steps: int = 4, gait: Gait | None = None,
                  capture_point: Callable[[Array, Array, float, float], ArrayLike]
-                 | None = None) -> None:
+                 | None = None, lead: float = 0.1, offset: float = 0.0,
+                 knee_bend: float = 0.0,
+                 landed_com_gains: tuple[float, float] | None = None) -> None:
         self.character = character
         self.capture_hook = capture_point
         self.stepping = bool(stepping)
@@ -143,8 +188,15 @@ class CaptureStep(Controller):
         self.lift_extra = 0.25  # rad: the thigh higher while it lifts
         self.over = 0.06  # m: the swing foot is above its target
         self.max_lift = 0.35  # s
-        self.lead = 0.1  # s: the capture point this far ahead (the swing's lag)
+        self.lead = as_positive(lead, "lead", allow_zero=True)  # s: the swing's lag
         self.max_step = 0.55  # m: the farthest a foot lands from the stance foot
+        self.offset = as_positive(offset, "offset", allow_zero=True)  # m: beyond xi
+        self.knee_bend = as_positive(knee_bend, "knee_bend", allow_zero=True)  # rad
+        if landed_com_gains is None:
+            landed_com_gains = (self.com_kp, self.com_kd)
+        if len(landed_com_gains) != 2 or min(landed_com_gains) < 0:
+            raise ValueError(f"landed_com_gains: (kp, kd) >= 0, got {landed_com_gains!r}")
+        self.landed_com_gains = (float(landed_com_gains[0]), float(landed_com_gains[1]))
         self.step_start = np.zeros(2)
         self._stepper = _Stepper(character, STEP_GAIT if gait is None else gait)
         self._stepper.owner = self
@@ -279,6 +331,10 @@ class CaptureStep(Controller):
             xi = p + (self._hooked(c, v) - p) * math.exp(w * self.lead)
         step = xi - p
         length = float(np.linalg.norm(step))
+        if self.offset and length > 1e-9:  # beyond the capture point: the COM comes back
+            xi = xi + step * (self.offset / length)
+            step = xi - p
+            length += self.offset
         if length > self.max_step:
             xi = p + step * (self.max_step / length)
         foot = data.xpos[swing.toe_body][:2] - data.xpos[swing.foot][:2]
@@ -301,6 +357,7 @@ class CaptureStep(Controller):
         feet = [data.xpos[b] for leg in self.parts.legs() for b in (leg.foot, leg.toe_body)]
         centre = np.mean(feet, axis=0)
         self._stand.com_target[:2] = centre[:2]
+        self._stand.com_kp, self._stand.com_kd = self.landed_com_gains
         self.mode = "stand"
         self._settled = t + 0.1
 
@@ -351,12 +408,12 @@ def stand_and_step(character: Character, *, stepping: bool = True, duration: flo
     :class:`CaptureStep` (``options`` are its keyword arguments), optionally pushed.
 
     Parameters as :func:`course.physics.balance.stand`; ``stepping=False`` switches the step
-    off (the balance alone).
+    off (the balance alone). ``options`` default to :data:`RECOVERY`.
     """
     duration = as_positive(duration, "duration")
     frame_time = as_positive(frame_time, "frame_time")
     fall_fraction = as_positive(fall_fraction, "fall_fraction")
-    controller = CaptureStep(character, stepping=stepping, **options)
+    controller = CaptureStep(character, stepping=stepping, **{**RECOVERY, **options})
     n = max(2, round(duration / frame_time) + 1)
     sim = Simulation(character, controller.neutral, frame_time=frame_time, h=h,
                      torque_limit=torque_limit, push=push,
@@ -395,6 +452,7 @@ def largest_push(character: Character, *, stepping: bool = True,
 
 
 __all__ = [
+    "RECOVERY",
     "STEP_GAIT",
     "CaptureStep",
     "SteppingResult",
