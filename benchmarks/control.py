@@ -1,8 +1,8 @@
 """course.control measured: policy-gradient training time and % of LQR's cost, the REINFORCE
 estimator's bias (in standard errors) and the variance each baseline saves, value iteration
 against LQR as the grid is refined, the iLQR swing-up, and the Riccati iteration against
-scipy's DARE solver, and the LQR balance of the standing CMU character against notebook 14's
-controllers on the same pushes — the figures docs/control.md quotes.
+scipy's DARE solver, and the LQR balance of the CMU character, on two feet against notebook
+14's controllers on the same pushes and on one leg — the figures docs/control.md quotes.
 
 Run:  .venv/bin/python benchmarks/control.py [--seeds 3] [--skip-vi] [--skip-character]
 
@@ -181,12 +181,16 @@ def riccati(problems: int) -> None:
 
 DIRECTIONS = {"forward": (0.0, 0.0, 1.0), "backward": (0.0, 0.0, -1.0),
               "sideways": (1.0, 0.0, 0.0)}
+#: One leg is not symmetric sideways: on the left foot (+x) a +x push moves the COM out over
+#: the stance foot's edge, a -x push towards the lifted foot.
+ONE_LEG_DIRECTIONS = {**DIRECTIONS, "sideways -x": (-1.0, 0.0, 0.0)}
 
 
-def character_lqr() -> tuple[float, float] | None:
-    """The LQR balance of the CMU character (course.physics.lqr_balance) beside ``none``,
-    ``ankle`` and ``com`` on the same pushes; (LQR, com) forward in N s, or None without the
-    clip."""
+def character_lqr() -> tuple[float, float, float] | None:
+    """The LQR balance of the CMU character (course.physics.lqr_balance) on two feet beside
+    ``none``, ``ankle`` and ``com`` on the same pushes, and on one leg (the left); the worst
+    direction's impulse (N s) of the two-foot LQR, of ``com`` and of the one-leg LQR, or None
+    without the clip."""
     from pathlib import Path
 
     import mujoco  # type: ignore[import-untyped]
@@ -204,35 +208,46 @@ def character_lqr() -> tuple[float, float] | None:
         return None
     mujoco.set_mju_user_warning(lambda message: None)  # diverged runs are counted, not logged
     character = build_model(load_bvh(path).skeleton)
-    start = time.perf_counter()
-    lqr = design(character)
-    seconds = time.perf_counter() - start
-    eq = lqr.equilibrium
-    print(f"\n== LQR balance, CMU character ({character.total_mass:.1f} kg, nv = "
-          f"{character.model.nv}, {lqr.B.shape[1]} torques): design {seconds:.1f} s")
-    print(f"  tutorial height search: {1e3 * eq.tutorial_height:.3f} mm leaves root "
-          f"{np.array2string(eq.tutorial_root_force, precision=3)} (N, N m)")
-    print(f"  with the tilt: {1e3 * eq.height:.3f} mm, tilt "
-          f"{np.array2string(1e3 * eq.tilt, precision=3)} mrad, root residual "
-          f"{np.abs(eq.root_force).max():.1e}; spectral radius of A - BK "
-          f"{lqr.spectral_radius:.10f}, max |K| {np.abs(lqr.K).max():.1f}")
-    run = lqr_stand(character, lqr, duration=3.0)
-    print(f"  unpushed 3 s: standing {survived(run)}, COM moved "
-          f"{1e3 * np.linalg.norm(run.com[-1] - run.com[0]):.3f} mm, max |root force| "
-          f"{np.abs(run.torques[:, :6]).max()}, {run.sim_time / run.wall_time:.1f} s/s")
+    designs = {}
+    for label, stance in (("two feet", None), ("one leg (left)", 0)):
+        start = time.perf_counter()
+        lqr = designs[label] = design(character, stance=stance)
+        seconds = time.perf_counter() - start
+        eq = lqr.equilibrium
+        print(f"\n== LQR balance, CMU character on {label} ({character.total_mass:.1f} kg, "
+              f"nv = {character.model.nv}, {lqr.B.shape[1]} torques): design {seconds:.1f} s")
+        print(f"  tutorial height search: {1e3 * eq.tutorial_height:.3f} mm leaves root "
+              f"{np.array2string(eq.tutorial_root_force, precision=3)} (N, N m)")
+        print(f"  with the tilt: {1e3 * eq.height:.3f} mm, tilt "
+              f"{np.array2string(1e3 * eq.tilt, precision=3)} mrad, root residual "
+              f"{np.abs(eq.root_force).max():.1e}; spectral radius of A - BK "
+              f"{lqr.spectral_radius:.10f}, max |K| {np.abs(lqr.K).max():.1f}")
+        run = lqr_stand(character, lqr, duration=3.0)
+        print(f"  unpushed 3 s: standing {survived(run)}, COM moved "
+              f"{1e3 * np.linalg.norm(run.com[-1] - run.com[0]):.3f} mm, max |root force| "
+              f"{np.abs(run.torques[:, :6]).max()}, {run.sim_time / run.wall_time:.1f} s/s")
     pose = standing_pose(character)
-    print("  largest push (N, 0.1 s; impulse N s in brackets):")
-    names = (*CONTROLLERS, "lqr")
-    print(f"  {'direction':10s}" + "".join(f"{c:>18s}" for c in names))
+    print("\n  largest push (N, 0.1 s; impulse N s in brackets):")
+    names = (*CONTROLLERS, "lqr", "lqr one leg")
+    print(f"  {'direction':12s}" + "".join(f"{c:>18s}" for c in names))
     found: dict[str, dict[str, float]] = {}
-    for label, d in DIRECTIONS.items():
-        forces = {c: largest_push(character, pose, controller=c, direction=d)
-                  for c in CONTROLLERS}
-        forces["lqr"] = lqr_largest_push(character, lqr, direction=d)
+    for label, d in ONE_LEG_DIRECTIONS.items():
+        forces = {"lqr one leg": lqr_largest_push(character, designs["one leg (left)"],
+                                                  direction=d)}
+        if label in DIRECTIONS:
+            forces |= {c: largest_push(character, pose, controller=c, direction=d)
+                       for c in CONTROLLERS}
+            forces["lqr"] = lqr_largest_push(character, designs["two feet"], direction=d)
         found[label] = forces
-        print(f"  {label:10s}" + "".join(f"{forces[c]:9.1f} ({0.1 * forces[c]:5.2f})"
-                                        for c in names))
-    return 0.1 * found["forward"]["lqr"], 0.1 * found["forward"]["com"]
+        print(f"  {label:12s}" + "".join(f"{forces[c]:9.1f} ({0.1 * forces[c]:5.2f})"
+                                        if c in forces else f"{'':>18s}" for c in names))
+    worst = {}
+    for c in ("lqr", "com", "lqr one leg"):
+        direction = min((label for label in found if c in found[label]),
+                        key=lambda label, c=c: found[label][c])
+        worst[c] = 0.1 * found[direction][c]
+        print(f"  worst direction of {c}: {direction}, {worst[c]:.2f} N s")
+    return worst["lqr"], worst["com"], worst["lqr one leg"]
 
 
 def main() -> None:
@@ -249,13 +264,13 @@ def main() -> None:
     ilqr()
     riccati(100)
     pushes = None if args.skip_character else character_lqr()
-    # One-leg standing is not built (docs/control.md, "LQR balance of the character").
     standing = ("LQR standing: not measured" if pushes is None else
-                f"LQR standing survives {pushes[0]:.2f} N s (com controller {pushes[1]:.2f} N s, "
-                "forward), one-leg not built")
+                f"LQR standing survives {pushes[0]:.2f} N s (com controller {pushes[1]:.2f} N s), "
+                f"one-leg {pushes[2]:.2f} N s")
+    print("\n(summary: each push its worst direction; policy gradient on the double integrator, "
+          "seed 0)")
     print(f"control: {standing}; policy gradient reaches {percent:.1f}% of LQR cost in "
-          f"{seconds:.2f} s on 1 core (double integrator, seed 0)")
-
+          f"{seconds:.2f} s on 1 core")
 
 if __name__ == "__main__":
     main()

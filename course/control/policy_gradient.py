@@ -58,6 +58,7 @@ from ._checks import (
     system_shapes,
 )
 from .lqr import gain_value_matrices, lqr_finite_horizon, lqr_infinite_horizon
+from .systems import LinearSizes
 
 Baseline = Literal["none", "mean"]
 BASELINES = ("none", "mean")
@@ -115,7 +116,7 @@ class LinearGaussianPolicy:
 
 
 @dataclass(frozen=True)
-class LQTask:
+class LQTask(LinearSizes):
     """A linear system, a quadratic cost and a Gaussian initial state: the episode
     REINFORCE learns on, with its exact cost and gradient.
 
@@ -162,14 +163,6 @@ class LQTask:
             initial_cov, "initial_cov", n, definite=False)
         return cls(A=a, B=b, Q=q, R=r, Q_final=qf, horizon=as_count(horizon, "horizon"),
                    initial_cov=cov, discount=gamma)
-
-    @property
-    def n_states(self) -> int:
-        return int(self.A.shape[0])
-
-    @property
-    def n_controls(self) -> int:
-        return int(self.B.shape[1])
 
     def _moments(self, K: Array, sigma: float) -> Array:
         """``Σ_t = E[x_t x_tᵀ]`` under ``u ~ N(-Kx, σ²I)``, ``(T + 1, n, n)``."""

@@ -59,8 +59,27 @@ def _state_and_control(x: ArrayLike, u: ArrayLike, n: int, m: int) -> tuple[Arra
     return xs, us
 
 
+class LinearSizes:
+    """The sizes of a model that holds ``A (n, n)`` and ``B (n, m)``: the one definition of
+    ``n_states`` and ``n_controls`` for :class:`LinearSystem` and
+    :class:`~course.control.policy_gradient.LQTask`."""
+
+    A: Array
+    B: Array
+
+    @property
+    def n_states(self) -> int:
+        """``n``, the rows of ``A``."""
+        return int(self.A.shape[0])
+
+    @property
+    def n_controls(self) -> int:
+        """``m``, the columns of ``B``."""
+        return int(self.B.shape[1])
+
+
 @dataclass(frozen=True)
-class LinearSystem:
+class LinearSystem(LinearSizes):
     """``x_{t+1} = A x_t + B u_t``, with names for its state and control entries.
 
     Attributes
@@ -77,14 +96,6 @@ class LinearSystem:
     dt: float
     state_names: tuple[str, ...]
     control_names: tuple[str, ...]
-
-    @property
-    def n_states(self) -> int:
-        return int(self.A.shape[0])
-
-    @property
-    def n_controls(self) -> int:
-        return int(self.B.shape[1])
 
     def step(self, x: ArrayLike, u: ArrayLike) -> Array:
         xs, us = _state_and_control(x, u, self.n_states, self.n_controls)

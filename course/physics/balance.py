@@ -154,7 +154,7 @@ def standing_pose(character: Character) -> Motion:
             level[j] = quat_between(d, flat) if np.linalg.norm(flat) > 1e-9 else np.array(
                 [1.0, 0.0, 0.0, 0.0]
             )
-    legs = {a for chain in feet for a in _ancestors(skel, chain[0])}
+    legs = {a for chain in feet for a in leg_joints(skel, chain[0])}
     upper = [c for c in skel.children(0) if c not in legs]
     data = mujoco.MjData(character.model)
     up = np.array([0.0, 1.0, 0.0])
@@ -206,7 +206,9 @@ def standing_pose(character: Character) -> Motion:
     return motion
 
 
-def _ancestors(skel: Any, j: int) -> list[int]:
+def leg_joints(skel: Any, j: int) -> list[int]:
+    """Joint ``j`` and its ancestors up to the root (the root, joint 0, excluded): the chain a
+    foot hangs from, foot first."""
     out = []
     while j > 0:
         out.append(j)
