@@ -1,8 +1,9 @@
 """Notebook 16's exercises against course.control: the reference of 16.riccati_step is the
 package's Riccati step (and iterated reaches the DARE's fixed point), and 16.reinforce_gradient
-is the package's leave-one-out REINFORCE estimate on the same episodes. (Solved by the
+is the package's leave-one-out REINFORCE estimate on the same episodes, and
+16.discounted_cost is the discounted objective LQTask computes exactly. (Solved by the
 reference and every named mistake caught: tests/test_exercises.py, which runs every
-notebook's.)"""
+notebook's; 16.discounted_cost's mistakes each named alone, here.)"""
 
 from __future__ import annotations
 
@@ -45,3 +46,38 @@ def test_reinforce_gradient_is_course_controls_with_the_mean_baseline() -> None:
                                                   batch.final_cost, policy.K, 0.5, gamma)
         theirs = library_gradient(batch, policy, discount=gamma, baseline="mean")
         assert np.allclose(ours, theirs, rtol=1e-10, atol=1e-12)
+
+
+def test_discounted_cost_is_the_tasks_objective() -> None:
+    """16.discounted_cost averaged over sampled episodes is LQTask's exact discounted J(K)
+    (within 4 standard errors), and with γ = 1 the plain sum of the episode's costs."""
+    from course.control import LinearGaussianPolicy, LQTask, double_integrator, sample_rollouts
+
+    s = double_integrator(dt=0.1)
+    ref = reference("16.discounted_cost")
+    policy = LinearGaussianPolicy(np.array([[0.5, 1.0]]), 0.5)
+    for gamma in (1.0, 0.9, 0.5):
+        task = LQTask.make(s.A, s.B, np.eye(2), [[1.0]], horizon=30, discount=gamma)
+        batch = sample_rollouts(task, policy, 20_000, np.random.default_rng(16))
+        J = ref(batch.cost, batch.final_cost, gamma)
+        sem = J.std(ddof=1) / np.sqrt(len(J))
+        assert abs(J.mean() - task.cost(policy.K, policy.sigma)) < 4 * sem
+    plain = ref(batch.cost[:5], batch.final_cost[:5], 1.0)
+    assert np.allclose(plain, batch.cost[:5].sum(1) + batch.final_cost[:5], rtol=1e-12)
+
+
+def test_discounted_cost_passes_and_names_each_mistake() -> None:
+    """The reference passes 16.discounted_cost's check; each listed mistake fails it and is
+    the one named (no other mistake's title in its feedback)."""
+    from course.exercises import check, exercise
+
+    key = "16.discounted_cost"
+    assert check(key, reference(key)).passed
+    mistakes = exercise(key).mistakes
+    assert {m.key for m in mistakes} >= {"discount_twice", "from_one", "from_the_end",
+                                        "final_undiscounted", "no_discount"}
+    for m in mistakes:
+        feedback = check(key, lambda *args, wrong=m.wrong: wrong(*args))
+        assert feedback.status == "fail", m.key
+        named = [other.key for other in mistakes if other.title in feedback.text]
+        assert named == [m.key], (m.key, named)

@@ -1,5 +1,6 @@
-"""Notebook 16 · optimal control and learning: one step of the Riccati recursion, and the
-REINFORCE estimate of the gradient of a linear-Gaussian policy (baseline and discount)."""
+"""Notebook 16 · optimal control and learning: one step of the Riccati recursion, the
+REINFORCE estimate of the gradient of a linear-Gaussian policy (baseline and discount), and
+the discounted cost of an episode (the discount's effect)."""
 
 from __future__ import annotations
 
@@ -64,6 +65,26 @@ def reinforce_gradient(x: np.ndarray, u: np.ndarray, cost: np.ndarray,
     and :math:`b_t` the mean :math:`G_t` of the *other* episodes (leave-one-out)."""
     G = costs_to_go(cost, final_cost, gamma)
     return _estimate(_score(x, u, K, sigma), G, gamma)
+
+
+def discounted_cost(cost: np.ndarray, final_cost: np.ndarray, gamma: float) -> np.ndarray:
+    r"""Reference of 16.discounted_cost: each episode's discounted cost
+    :math:`J = \sum_{t=0}^{T-1} \gamma^t c_t + \gamma^T c_T`, ``(N,)``, from the running costs
+    ``cost (N, T)`` (step ``t`` weighed :math:`\gamma^t`, the first step 1) and the cost of
+    the last state ``final_cost (N,)`` (:math:`\gamma^T`, one step after the last control)."""
+    return _discounted(cost, final_cost, gamma)
+
+
+def _discounted(cost: Arr, final_cost: Arr, gamma: float, *, first: int = 0, power: int = 1,
+                final_step: int | None = None) -> Arr:
+    """``Σ_t γ^(power (t + first)) c_t + γ^(power final_step) c_T`` (``final_step``
+    defaults to ``T + first``): the reference and its mistakes."""
+    c = np.asarray(cost, dtype=float)
+    T = c.shape[1]
+    last = T + first if final_step is None else final_step
+    weights = float(gamma) ** (power * (np.arange(T) + first))
+    final = float(gamma) ** (power * last) * np.asarray(final_cost, dtype=float)
+    return np.asarray((c * weights).sum(1) + final, dtype=float)
 
 
 # -- mistakes ---------------------------------------------------------------------------------
@@ -148,6 +169,18 @@ def _rollouts(rng: np.random.Generator, N: int, T: int, gamma: float) -> tuple[o
     cost = (x[:, :-1] ** 2).sum(-1) + (u**2).sum(-1)
     final = 5.0 * (x[:, -1] ** 2).sum(-1)
     return (x, u, cost, final, K, sigma, gamma)
+
+
+def _discount_cases(rng: np.random.Generator) -> list[Case]:
+    def episodes(N: int, T: int) -> tuple[Arr, Arr]:
+        return (np.round(rng.uniform(0.5, 3.0, (N, T)), 2),
+                np.round(rng.uniform(1.0, 10.0, N), 2))
+
+    return [Case("one episode of 3 steps, costs 1, 1, 1 and final cost 1, γ = 0.5",
+                 (np.ones((1, 3)), np.ones(1), 0.5)),
+            Case("4 episodes of 5 steps, γ = 0.9", (*episodes(4, 5), 0.9)),
+            Case("3 episodes of 10 steps, γ = 0.7", (*episodes(3, 10), 0.7)),
+            Case("2 episodes of 4 steps, no discount (γ = 1)", (*episodes(2, 4), 1.0))]
 
 
 def _reinforce_cases(rng: np.random.Generator) -> list[Case]:
@@ -235,6 +268,56 @@ EXERCISES = (
                           "u + Kx and ∇_K log π = −(u + Kx) xᵀ / σ².",
                           wrong=lambda x, u, c, f, K, s, g: _estimate(
                               _score(x, u, -np.asarray(K), s), costs_to_go(c, f, g), g)),
+        ),
+    ),
+    Exercise(
+        "discounted_cost",
+        Function("discounted_cost", ("cost", "final_cost", "gamma"), discounted_cost,
+                 Check(None, atol=1e-9, rtol=1e-9, noun="discounted cost")),
+        _discount_cases,
+        hint="The first step counts fully (γ⁰ = 1), each later step γ times less than the one "
+             "before; the final cost belongs to the state after the last control, x_T, one "
+             "step after step T − 1. One weight per step, then a sum along each episode.",
+        formula="T = cost.shape[1]; J = (cost * gamma ** np.arange(T)).sum(axis=1) "
+                "+ gamma ** T * final_cost.",
+        mistakes=(
+            Misconception("discount_twice", "discounted_cost",
+                          "the discount applied twice: γ^(2t)",
+                          "Each step is discounted once, by γᵗ; weighing by γᵗ a cost that "
+                          "already carries γᵗ (or squaring the weight) discounts it as if "
+                          "with γ².",
+                          wrong=lambda c, f, g: _discounted(c, f, g, power=2)),
+            Misconception("from_one", "discounted_cost",
+                          "γᵗ from the wrong start: the first step weighed γ, not 1",
+                          "The sum starts at t = 0 with γ⁰ = 1: the first cost is not "
+                          "discounted (np.arange(T), not np.arange(1, T + 1)).",
+                          wrong=lambda c, f, g: _discounted(c, f, g, first=1)),
+            Misconception("from_the_end", "discounted_cost",
+                          "γᵗ counted from the end of the episode: γ^(T−t)",
+                          "The discount looks ahead from the start: the *first* step counts "
+                          "fully and the late ones less (reversing the weights makes the "
+                          "controller care most about the end).",
+                          wrong=lambda c, f, g: _discounted(np.asarray(c)[:, ::-1], f, g,
+                                                            first=1, final_step=0)),
+            Misconception("final_undiscounted", "discounted_cost",
+                          "the final cost left undiscounted",
+                          "c_T is paid at step T, after T steps: it is weighed γ^T like every "
+                          "other cost is weighed by its step.",
+                          wrong=lambda c, f, g: _discounted(c, f, g, final_step=0)),
+            Misconception("final_one_step_short", "discounted_cost",
+                          "the final cost weighed γ^(T−1), as the last running cost",
+                          "The last control is at step T − 1 and the state it leads to, x_T, "
+                          "at step T: its cost carries γ^T.",
+                          wrong=lambda c, f, g: _discounted(c, f, g,
+                                                            final_step=np.shape(c)[1] - 1)),
+            Misconception("no_final_cost", "discounted_cost", "the final cost left out",
+                          "The episode's cost includes the cost of the state it ends in, "
+                          "γ^T c_T (the LQR's x_Tᵀ Q_f x_T).",
+                          wrong=lambda c, f, g: _discounted(c, 0 * np.asarray(f), g)),
+            Misconception("no_discount", "discounted_cost", "no discount: a plain sum",
+                          "With γ < 1 step t counts γᵗ: the weights fall geometrically, "
+                          "and a cost 1/(1 − γ) steps away counts about e⁻¹ ≈ 0.37 of the first.",
+                          wrong=lambda c, f, g: _discounted(c, f, 1.0)),
         ),
     ),
 )

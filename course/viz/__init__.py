@@ -34,6 +34,7 @@ _EXPORTS = {
     "ik_playground_view": ("ik_playground",),
     "full_body_ik_view": ("full_body_ik",),
     "cloth": ("ClothScene", "ClothSimulator", "cloth_simulator"),
+    "lqr_view": ("LQRBalanceSimulator", "lqr_balance_simulator"),
 }
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 

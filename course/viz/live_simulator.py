@@ -41,7 +41,8 @@ class LiveSimulator(ABC, Generic[S]):
     Parameters
     ----------
     scene : the view, shown right of the controls at its window's width.
-    sliders : the controls under the buttons; ``sliders["h"]`` is the time step (s).
+    sliders : the controls under the buttons; ``sliders["h"]`` is the time step (s), unless
+        the subclass overrides :attr:`step_time`.
     buttons : more buttons, between "step" and "reset".
     speed : the simulated seconds per real second that play aims for (1.0: real time).
     max_steps_per_tick : the most steps one tick of play takes (the cost cap).
@@ -96,15 +97,22 @@ class LiveSimulator(ABC, Generic[S]):
         """Write the readout and render the scene."""
 
     @property
+    def step_time(self) -> float:
+        """Simulated seconds one step of :meth:`advance` takes: the ``h`` slider's value (a
+        subclass whose steps are whole frames of a fixed length returns that)."""
+        return float(self.sliders["h"].value)
+
+    @property
     def steps_per_tick(self) -> int:
-        """How many steps of ``h`` one tick of play takes: enough for ``speed``, capped."""
-        wanted = self.speed * self.play.interval / 1000 / float(self.sliders["h"].value)
+        """How many steps of :attr:`step_time` one tick of play takes: enough for ``speed``,
+        capped."""
+        wanted = self.speed * self.play.interval / 1000 / self.step_time
         return int(min(max(round(wanted), 1), self.max_steps_per_tick))
 
     @property
     def playback_speed(self) -> float:
         """Simulated seconds per real second while playing (1.0: real time)."""
-        return float(self.steps_per_tick * self.sliders["h"].value / (self.play.interval / 1000))
+        return float(self.steps_per_tick * self.step_time / (self.play.interval / 1000))
 
     def tick(self) -> None:
         """What one tick of play does: :attr:`steps_per_tick` steps, drawn once."""

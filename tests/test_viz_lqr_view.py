@@ -1,0 +1,88 @@
+"""Notebook 16's live LQR balance view: the CMU character standing under LQR, the cost's
+weights on sliders (the gain re-designed on release), a push, and a readout of what happened.
+
+One two-foot design per module (about 4 s); every run is short (1.5 s simulated, under 0.1 s).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+pytest.importorskip("ipywidgets")
+pytest.importorskip("pyvista")
+
+from course.physics.lqr_balance import (  # noqa: E402
+    Weights,
+    design,
+    lqr_stand,
+    reweigh,
+    survived,
+)
+from course.physics.simulation import Push  # noqa: E402
+from course.viz.lqr_view import MEASURED, lqr_balance_simulator  # noqa: E402
+
+pytestmark = pytest.mark.usefixtures("mujoco_log_elsewhere")
+
+
+@pytest.fixture(scope="module")
+def lqr(cmu):
+    return design(cmu)
+
+
+@pytest.fixture
+def view(cmu, lqr):
+    v = lqr_balance_simulator(cmu, lqr, push=0.0, duration=1.5)
+    yield v
+    v.close()
+
+
+def test_the_sliders_set_the_gain_it_uses(view, cmu, lqr) -> None:
+    assert view.controller.K is lqr.K
+    view.sliders["velocity"].value = 3.0  # released: designed again, run again, playing
+    assert view.design.weights == Weights(velocity=3.0)
+    expected = reweigh(cmu, lqr, Weights(velocity=3.0))
+    np.testing.assert_allclose(view.controller.K, expected.K)
+    assert np.abs(view.controller.K - lqr.K).max() > 10.0  # a different gain, in use
+    assert view.design.equilibrium is lqr.equilibrium  # the equilibrium kept: a DARE alone
+    assert view.sim.frame == 0 and view.play.playing
+    assert "gain designed in" in view.readout.value
+    view.sliders["torque"].value = 10.0  # R ten times: the same gain as Q a tenth
+    tenth = reweigh(cmu, lqr, Weights(velocity=3.0, scale=1.0))
+    np.testing.assert_allclose(view.controller.K, tenth.K, rtol=1e-6, atol=1e-6 * 983)
+
+
+def test_no_push_stands_and_the_readout_says_so(view) -> None:
+    assert "push: none" in view.readout.value
+    view.finish()
+    assert view.stopped and view.fall_time is None and not view.play.playing
+    assert "stood 1.5 s" in view.readout.value
+    assert view.sim.frame == view.n_frames - 1 == 90
+
+
+def test_a_push_past_the_measured_limit_falls(view, cmu, lqr) -> None:
+    limit = MEASURED["two feet"][0]  # N forward, the default gain's (docs/control.md)
+    view.sliders["push"].value = 2 * limit
+    force = view.sliders["push"].value  # on the slider's 5 N steps
+    assert force > 1.9 * limit
+    view.push_button.click()  # runs again with the push, playing
+    assert view.play.playing and view.sim.frame == 0
+    view.finish()
+    assert view.fall_time is not None and view.fall_time < 1.5
+    assert f"fell at {view.fall_time:.2f} s" in view.readout.value
+    assert f"{force:.0f} N for 0.1 s" in view.readout.value
+    # the same run as lqr_stand's, up to where the view stopped it
+    run = lqr_stand(cmu, lqr, duration=1.5, push=Push("Hips", (0, 0, force), 0.25, 0.1))
+    assert not survived(run)
+    n = view.sim.frame + 1
+    np.testing.assert_array_equal(view.sim.recording().qpos[:n - 1], run.qpos[:n - 1])
+
+
+def test_a_push_within_the_limit_stands(view) -> None:
+    view.sliders["push"].value = 80.0
+    view.sliders["push_direction"].value = 180.0
+    view.push_button.click()
+    view.finish()
+    assert view.fall_time is None and "stood 1.5 s" in view.readout.value
+    assert "com controller 159 N" in view.readout.value  # backward, beside LQR's own 131
