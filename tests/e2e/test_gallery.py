@@ -74,6 +74,8 @@ REQUIRED = {
     "assignments/a2_forward_kinematics.ipynb": ("min (frame", "max (frame"),
     "notebooks/11_keyframes.ipynb": ("min (keys n", "min (p0"),
     "notebooks/13_rigid_bodies.ipynb": ("min (time step h", "max (time step h"),
+    "notebooks/15_walking.ipynb": ("min (speed", "max (speed"),
+    "notebooks/16_optimal_control.ipynb": ("min (Q COM", "max (Q COM"),
 }
 SIZES = ((1366, 768), (1920, 1080))
 # the notebook alone, then beside the file browser (``.shell`` calls; the state a shot names)
