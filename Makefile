@@ -76,7 +76,7 @@ e2e: setup
 	    echo "Installing chromium for the browser test..."; \
 	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium >/dev/null; \
 	  else echo "warning: the browser test needs chromium (apt-get install chromium)"; fi; }
-	$(TEST_ENV) $(PY) -m pytest -q tests/e2e
+	$(TEST_ENV) $(PY) -m pytest -q --durations=12 tests/e2e
 
 lint: setup
 	$(VENV)/bin/ruff check .

@@ -40,20 +40,12 @@ SAMPLE = Path(__file__).resolve().parents[1] / "course" / "data" / "samples" / "
 FORWARD = (0.0, 0.0, 1.0)  # y-up: the way the feet point in both skeletons' rest pose
 
 
-@pytest.fixture(autouse=True)
-def _mujoco_log_elsewhere(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
+pytestmark = pytest.mark.usefixtures("mujoco_log_elsewhere")
 
 
 @pytest.fixture(scope="module")
 def sample():
     motion = load_bvh(SAMPLE)
-    return build_model(motion.skeleton)
-
-
-@pytest.fixture(scope="module")
-def cmu(shared_bvh_dir: Path):
-    motion = load_bvh(shared_bvh_dir / "cmu_12_01_walk.bvh")
     return build_model(motion.skeleton)
 
 

@@ -35,10 +35,7 @@ SAMPLE = Path(__file__).resolve().parents[1] / "course" / "data" / "samples" / "
 H = 1.0 / 600.0
 
 
-@pytest.fixture(autouse=True)
-def _mujoco_log_elsewhere(tmp_path, monkeypatch):
-    """MuJoCo writes MUJOCO_LOG.TXT into the working folder when a run goes unstable."""
-    monkeypatch.chdir(tmp_path)
+pytestmark = pytest.mark.usefixtures("mujoco_log_elsewhere")
 
 
 @pytest.fixture(scope="module")

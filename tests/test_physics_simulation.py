@@ -40,10 +40,7 @@ from course.physics.simulation import (  # noqa: E402
 SAMPLE = Path(__file__).resolve().parents[1] / "course" / "data" / "samples" / "wave.bvh"
 
 
-@pytest.fixture(autouse=True)
-def _mujoco_log_elsewhere(tmp_path, monkeypatch):
-    """MuJoCo writes MUJOCO_LOG.TXT into the working folder when a run goes unstable."""
-    monkeypatch.chdir(tmp_path)
+pytestmark = pytest.mark.usefixtures("mujoco_log_elsewhere")
 
 
 @pytest.fixture(scope="module")

@@ -290,10 +290,7 @@ from course.physics.zmp import (  # noqa: E402
     zmp_from_mujoco,
 )
 
-
-@pytest.fixture(autouse=True)
-def _mujoco_log_elsewhere(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
+pytestmark = pytest.mark.usefixtures("mujoco_log_elsewhere")
 
 
 @pytest.fixture(scope="module")

@@ -21,9 +21,7 @@ from course.viz.simulation_view import SimulationView, simulation_view  # noqa: 
 SAMPLE = Path(__file__).resolve().parents[1] / "course" / "data" / "samples" / "wave.bvh"
 
 
-@pytest.fixture(autouse=True)
-def _mujoco_log_elsewhere(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
+pytestmark = pytest.mark.usefixtures("mujoco_log_elsewhere")
 
 
 @pytest.fixture(scope="module")
