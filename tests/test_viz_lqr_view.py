@@ -58,6 +58,10 @@ def test_no_push_stands_and_the_readout_says_so(view) -> None:
     view.finish()
     assert view.stopped and view.fall_time is None and not view.play.playing
     assert "stood 1.5 s" in view.readout.value
+    # the floor's neutral modes (x, z, yaw) sit at |λ| = 1; every other mode decays
+    line = view.readout.value.split("<br>")[3]
+    assert "ρ(A − BK) = 1 on 3 neutral modes" in line
+    assert float(line.rsplit("≤ ", 1)[1].split()[0]) < 1.0
     assert view.sim.frame == view.n_frames - 1 == 90
 
 

@@ -101,6 +101,7 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
         start = time.perf_counter()
         self.design = lqr_balance.design(character) if design is None else design
         self.design_time = time.perf_counter() - start
+        self._gain_line = gain_line(self.design, self.design_time)
         self._designs = {self.design.stance: self.design}  # equilibrium and (A, B) per stance
         pose = motion_from_qpos(character, self.design.equilibrium.qpos[None],
                                 self.frame_time).forward_kinematics()[0][0]
@@ -172,6 +173,7 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
             self._designs[stance] = lqr_balance.design(self.character, stance=stance)
         self.design = lqr_balance.reweigh(self.character, self._designs[stance], self.weights())
         self.design_time = time.perf_counter() - start
+        self._gain_line = gain_line(self.design, self.design_time)
         self.rerun()
 
     def rerun(self) -> None:
@@ -268,14 +270,25 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
         size = float(np.linalg.norm(self.push_force()))
         push = (f"push: {size:.0f} N for {self.push_duration:g} s at {self.push_start:g} s "
                 f"= {size * self.push_duration:.1f} N s" if size > 0 else "push: none")
-        d = self.design
-        lines = [state, push, self._measured(),
-                 f"gain designed in {self.design_time:.2f} s: max |K| "
-                 f"{np.abs(d.K).max():.0f}, ρ(A − BK) = {d.spectral_radius:.4f}",
+        lines = [state, push, self._measured(), self._gain_line,
                  f"play: {self.speed:g}× real time, {self.steps_per_tick} frames of 1/60 s "
                  f"a tick"]
         self.readout.value = "<br>".join(lines)
         self.scene.render()
+
+
+def gain_line(design: Any, seconds: float) -> str:
+    """The readout's line on a design: its time, its largest gain and how fast the closed loop
+    ``A − BK`` settles. Its spectral radius is 1 on the floor's neutral modes (the body slid or
+    turned on the floor stays so: nothing in the cost pulls it back), which alone would read as
+    "not stable"; the slowest other mode is the one that says how fast a push dies away."""
+    magnitudes = np.sort(np.abs(np.linalg.eigvals(design.A - design.B @ design.K)))[::-1]
+    neutral = int(np.sum(np.abs(magnitudes - 1.0) < 1e-5))  # 1 but for finite differences
+    rest = magnitudes[neutral:]
+    settle = (f"; ρ(A − BK) = 1 on {neutral} neutral modes (sliding, turning on the floor), "
+              f"|λ| ≤ {rest[0]:.5f} on the others" if neutral and rest.size else
+              f"; ρ(A − BK) = {magnitudes[0]:.5f}")
+    return f"gain designed in {seconds:.2f} s: max |K| {np.abs(design.K).max():.0f}{settle}"
 
 
 def lqr_balance_simulator(character: Any, design: Any | None = None,
