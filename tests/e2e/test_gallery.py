@@ -83,6 +83,8 @@ LAYOUTS = (("collapseLeft", ""), ("expandLeft", ", beside the file browser"))
 PARALLEL = int(os.environ.get("GALLERY_PARALLEL", "3"))
 SETTLE_S = 2.0  # after a change: the kernel answers, the browser draws
 FIT_MARGIN = 8  # px the output must leave of the notebook's visible height
+# seconds per notebook: opening and Run All, then the shots (in gallery.html: where time goes)
+TIMES: dict[str, tuple[float, float]] = {}
 
 # The interactive views, marked ``data-gallery-view="k"`` for the locators: every 3D view, and
 # in an output with a slider or a play button but no 3D view its largest image (a figure drawn
@@ -407,6 +409,8 @@ async def _gallery_of(browser, base: str, notebook: str) -> list[Shot]:
                                                           strict=True)))
     await context.add_init_script(FRAME_PROBE)
     page = await context.new_page()
+    clock = asyncio.get_running_loop().time
+    start = ran = clock()
     try:
         await page.goto(f"{base}/lab/tree/{notebook}?reset&token={TOKEN}")
         for attempt in range(3):  # on a busy machine a kernel can miss its start: reload
@@ -430,6 +434,7 @@ async def _gallery_of(browser, base: str, notebook: str) -> list[Shot]:
         if tracebacks:
             shots.append(Shot(notebook, SIZES[0], -1, "run", "", [
                 f"a cell failed: {tracebacks[0][-300:]}"]))
+        ran = clock()
         kinds = await page.evaluate(FIND_VIEWS)
         await _shoot_views(page, kinds, shots, notebook)
         missing = [s for s in REQUIRED.get(notebook, ())
@@ -452,6 +457,7 @@ async def _gallery_of(browser, base: str, notebook: str) -> list[Shot]:
         except Exception:
             pass
         await context.close()
+        TIMES[notebook] = (ran - start, clock() - ran)
     return shots
 
 
@@ -489,7 +495,9 @@ def _write_gallery(results: dict[str, list[Shot]]) -> Path:
                          f"{s.view} {s.state}: {verdict}</figcaption></figure>")
         if not shots:
             cells.append("<p>no interactive view</p>")
-        rows.append(f"<section><h2>{html.escape(notebook)}</h2>{''.join(cells)}</section>")
+        run, shoot = TIMES.get(notebook, (0.0, 0.0))
+        rows.append(f"<section><h2>{html.escape(notebook)}</h2><p>opened and run in {run:.0f} s,"
+                    f" shot in {shoot:.0f} s</p>{''.join(cells)}</section>")
     page = ("<!doctype html><meta charset=utf-8><title>course-kinematics: the live views</title>"
             "<style>body{font:14px sans-serif;margin:16px}section{margin-bottom:18px}"
             "figure{display:inline-block;margin:4px;vertical-align:top;max-width:460px}"
@@ -503,6 +511,7 @@ def _write_gallery(results: dict[str, list[Shot]]) -> Path:
             + "".join(rows))
     path = ARTIFACTS / "gallery.html"
     path.write_text(page)
+    (ARTIFACTS / "times.json").write_text(json.dumps(TIMES, indent=1))
     return path
 
 
