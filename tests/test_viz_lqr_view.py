@@ -90,3 +90,36 @@ def test_a_push_within_the_limit_stands(view) -> None:
     view.finish()
     assert view.fall_time is None and "stood 1.5 s" in view.readout.value
     assert "com controller 159 N" in view.readout.value  # backward, beside LQR's own 131
+
+
+def _com_y_up(cmu, data) -> np.ndarray:
+    c = data.subtree_com[int(cmu.bodies[0])]  # MuJoCo, z up
+    return np.array([c[0], c[2], -c[1]])
+
+
+def test_the_push_com_and_capture_point_are_drawn_where_they_are(view, cmu) -> None:
+    view.sliders["push"].value = 250.0  # forward, +z; from 0.25 s for 0.1 s
+    view.push_button.click()
+    view.advance(16)  # t = 0.267 s: the next frame pushes
+    assert view.pushing and view.markers.push_shown
+    root = view.scene.skeleton().positions[0]
+    assert view.markers._push_line.points[1] == pytest.approx(root)  # into the root
+    assert np.all(np.diff(view.markers._push_line.points[:, 2]) > 0)  # along +z
+    view.advance(5)  # t = 0.35 s: the push has ended
+    before = _com_y_up(cmu, view.sim.data)
+    view.advance(1)
+    assert not view.pushing and not view.markers.push_shown
+    c = _com_y_up(cmu, view.sim.data)
+    scale = cmu.scale
+    floor = view.scene.floor_height
+    np.testing.assert_allclose(view.markers.com_marker[[0, 2]] * scale, c[[0, 2]], atol=1e-9)
+    assert view.markers.com_marker[1] == pytest.approx(floor + view.markers.lift)
+    # ξ = c + ċ/ω0, ċ by a finite difference over the last frame, h over MuJoCo's floor
+    v = (c - before) / view.frame_time
+    w0 = np.sqrt(9.81 / (c[1] - view.ground_height))
+    xi = c[[0, 2]] + v[[0, 2]] / w0
+    drawn = view.markers.capture_marker[[0, 2]] * scale
+    assert np.linalg.norm(xi - c[[0, 2]]) > 0.05  # pushed forward: ξ well ahead of the COM
+    np.testing.assert_allclose(drawn, xi, atol=0.01)
+    assert drawn[1] > c[2]  # ahead, the push's way
+    assert "capture point ξ" in view.readout.value

@@ -8,7 +8,10 @@ one step, reset, the readout) beside a :class:`~course.viz.scene.SkeletonScene`.
 equilibrium, for :attr:`LQRBalanceSimulator.duration` seconds, with the push sliders' push on
 the root (size in N for ``push_duration`` s from ``push_start`` s, direction about the
 vertical: 0 forward, 90 degrees to the left), stopped when the COM falls below 60 % of its
-height or the run diverges.
+height or the run diverges. On the floor are the COM's projection, the capture point
+:math:`\\xi = c + \\dot c/\\omega_0` and the line between them
+(:mod:`course.viz.ground_markers`): the character stands while the ring stays over its feet;
+the push is an arrow into the root while it acts.
 
 The sliders are :math:`\\log_{10}` of the cost's weights (:class:`~course.physics.lqr_balance.
 Weights`): per group of ``Q`` (the COM over the support, the balance joints, the other
@@ -37,6 +40,7 @@ import numpy as np
 
 from .._typing import Array
 from .backend import latest_on_gl_thread
+from .ground_markers import COLORS, GroundMarkers, color_key, com_state, y_up
 from .live_simulator import LiveSimulator, log_slider
 from .scene import SkeletonScene
 
@@ -78,6 +82,10 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
     design : the gain in use (:class:`~course.physics.lqr_balance.LQRDesign`).
     design_time : wall seconds the last design took.
     sim : this run's :class:`~course.physics.simulation.Simulation`.
+    pushed : this run's :class:`~course.physics.simulation.Push`, or None.
+    markers : the COM, capture point and push drawn (:class:`~course.viz.ground_markers.
+        GroundMarkers`).
+    ground_height : MuJoCo's floor, y-up m.
     """
 
     frame_time = 1.0 / 60.0  # s: one step of play, as lqr_stand's frame
@@ -111,6 +119,11 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
                             for sx in (-r, r) for sz in (-r, r)])
         scene.add_skeleton(character.skeleton.parents, pose, name="LQR",
                            frame_points=np.concatenate([pose, corners]))
+        #: MuJoCo's floor, y-up m (the capture point's height reference)
+        self.ground_height = float(y_up(character.model.geom("floor").pos)[1])
+        assert scene.floor_height is not None  # the scene draws its floor
+        self.markers = GroundMarkers(scene, ground_height=scene.floor_height,
+                                     meters=character.scale)
         w = self.design.weights
         sliders: dict[str, widgets.Widget] = {
             key: log_slider(label, getattr(w, key), lo, hi, ".3g")
@@ -196,6 +209,7 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
         force = self.push_force()
         push = (Push(self.character.skeleton.names[0], force, self.push_start,
                      self.push_duration) if np.any(force) else None)
+        self.pushed = push
         self.sim = lqr_simulation(self.character, self.design, push=push,
                                   torque_limit=self.torque_limit, frame_time=self.frame_time,
                                   stop_when_diverged=True)
@@ -235,11 +249,23 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
             return sim.time
         return sim.fall_time
 
+    @property
+    def pushing(self) -> bool:
+        """Whether this run's push acts in the frame simulated next."""
+        return self.pushed is not None and self.pushed.active(self.sim.time, self.frame_time)
+
     def _draw(self) -> None:
         from course.physics.model import motion_from_qpos
 
         motion = motion_from_qpos(self.character, self.sim.data.qpos[None], self.frame_time)
-        self.scene.set_pose(motion.forward_kinematics()[0][0], render=False)
+        pose = motion.forward_kinematics()[0][0]
+        c, _, xi = com_state(self.character, self.sim.model, self.sim.data, self.ground_height)
+        scale = self.character.scale
+        self.markers.set_ground_points(c / scale, xi / scale)
+        push = self.pushed if self.pushing else None
+        self.markers.show_push(None if push is None else pose[0],
+                               None if push is None else push.force)
+        self.scene.set_pose(pose, render=False)
 
     def _measured(self) -> str:
         """The largest pushes of docs/control.md in the push sliders' direction, if any."""
@@ -270,9 +296,11 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
         size = float(np.linalg.norm(self.push_force()))
         push = (f"push: {size:.0f} N for {self.push_duration:g} s at {self.push_start:g} s "
                 f"= {size * self.push_duration:.1f} N s" if size > 0 else "push: none")
+        key = color_key([(COLORS["com"], "COM"), (COLORS["capture"], "capture point ξ"),
+                         (COLORS["push"], "push")])
         lines = [state, push, self._measured(), self._gain_line,
                  f"play: {self.speed:g}× real time, {self.steps_per_tick} frames of 1/60 s "
-                 f"a tick"]
+                 f"a tick", key]
         self.readout.value = "<br>".join(lines)
         self.scene.render()
 

@@ -91,6 +91,7 @@ class SkeletonScene(LiveView):
         self.trail: Trail | None = None  # see add_trail
         self._legend: widgets.HTML | None = None  # HTML above a view rendered in the browser
         self._ground_wanted = ground
+        self.floor_height: float | None = None  # the drawn floor's y, once a skeleton framed it
         self._camera = camera
         self._follow: tuple[str, Array] | None = None  # (skeleton, root position at last move)
         self._targets: pv.PolyData | None = None
@@ -178,6 +179,7 @@ class SkeletonScene(LiveView):
             self.plotter.add_mesh(
                 plane, scalars="tile", cmap=list(FLOOR_COLORS), show_scalar_bar=False,
                 ambient=0.35, diffuse=0.7, specular=0.0, pickable=False, reset_camera=False)
+            self.floor_height = float(plane.bounds[2])
         self.set_camera(self._camera)
 
     def legend_entries(self) -> list[tuple[str, str]]:

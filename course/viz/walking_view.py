@@ -40,9 +40,11 @@ from numpy.typing import ArrayLike
 
 from .._typing import Array
 from .backend import configure_environment, latest_on_gl_thread
+from .ground_markers import COLORS as MARKER_COLORS
+from .ground_markers import GroundMarkers, color_key, com_state, y_up
 from .live_simulator import LiveSimulator
 from .live_view import shade
-from .meshes import FLOOR_COLORS, floor_plane, move_points, tube_actor
+from .meshes import FLOOR_COLORS, floor_plane, move_points
 from .scene import SkeletonScene
 
 configure_environment()
@@ -50,20 +52,13 @@ configure_environment()
 import pyvista as pv  # noqa: E402  (after the environment is set: VTK reads it on import)
 
 WINDOW = (640, 420)  # px: the 3D view, as notebook 14's
-COLORS = {"left": "#2bb673", "right": "#e5484d", "capture": "#f5a623", "com": "#3d4a5c",
-          "push": "#8e6bd8"}
+COLORS = {"left": "#2bb673", "right": "#e5484d", **MARKER_COLORS}
 #: where the camera looks from (towards the walker, y up): its left side, ahead, above
 VIEW_DIRECTION = (1.0, 0.62, 0.75)
 #: the ground about the walker's root the camera keeps in view (m): sideways, back, ahead
 GROUND_IN_VIEW = (0.55, 0.85, 0.55)
 FOOTPRINT_CAPACITY = 256  # footprints drawn per foot (the oldest drop out)
 MAX_TIME = 60.0  # s: a walk stops there (reset starts another)
-
-
-def _y_up(v: ArrayLike) -> Array:
-    """MuJoCo's z-up ``(x, y, z)`` as the course's y-up ``(x, z, -y)``."""
-    a = np.asarray(v, dtype=np.float64)
-    return np.array([a[0], a[2], -a[1]])
 
 
 class WalkingScene(SkeletonScene):
@@ -125,31 +120,11 @@ class WalkingScene(SkeletonScene):
             shade(actor, COLORS[foot], specular=0.1)
             self._prints[foot] = mesh
         self._collapse_prints()
-        # the COM's projection (a dot), the capture point (a ring) and the line between them
-        lift = 0.012 * u  # above the floor and the footprints
-        self._lift = lift
-        self._com_disc = pv.Disc(center=(0.0, 0.0, 0.0), inner=0.0, outer=0.035 * u,
-                                 normal=(0.0, 1.0, 0.0), c_res=24)
-        self._xi_ring = pv.Disc(center=(0.0, 0.0, 0.0), inner=0.04 * u, outer=0.07 * u,
-                                normal=(0.0, 1.0, 0.0), c_res=32)
-        self._com_base = np.array(self._com_disc.points)
-        self._xi_base = np.array(self._xi_ring.points)
-        for mesh, color in ((self._com_disc, COLORS["com"]), (self._xi_ring, COLORS["capture"])):
-            actor = self.plotter.add_mesh(mesh, color=color, reset_camera=False, pickable=False)
-            shade(actor, color, specular=0.1)
-        self._link = pv.PolyData(np.zeros((2, 3)), lines=np.array([2, 0, 1]))
-        link = tube_actor(self._link, 0.008 * u, browser=self._in_browser)
-        shade(link, COLORS["capture"], specular=0.1)
-        self.plotter.add_actor(link, reset_camera=False, pickable=False)
-        # the push, while it acts: an arrow's shaft into the root
-        self._push_line = pv.PolyData(np.zeros((2, 3)), lines=np.array([2, 0, 1]))
-        self._push_actor = tube_actor(self._push_line, 0.02 * u, browser=self._in_browser)
-        shade(self._push_actor, COLORS["push"])
-        self.plotter.add_actor(self._push_actor, reset_camera=False, pickable=False)
-        self._push_actor.visibility = False
-        self._com = np.array([root[0], self.ground_height, root[2]])
-        self._xi = self._com.copy()
-        self.set_ground_points(self._com, self._xi, render=False)
+        # the COM's projection, the capture point and the push (ground_markers)
+        self.markers = GroundMarkers(self, ground_height=self.ground_height, meters=self.meters)
+        self._lift = self.markers.lift
+        ground = np.array([root[0], self.ground_height, root[2]])
+        self.markers.set_ground_points(ground, ground)
 
     def _aim_follow(self, root: Array) -> None:
         """The follow camera from :data:`VIEW_DIRECTION`, framing the pose and the ground
@@ -226,52 +201,32 @@ class WalkingScene(SkeletonScene):
 
     def set_ground_points(self, com: ArrayLike, capture_point: ArrayLike, *,
                           render: bool = True) -> None:
-        """Put the COM's marker under ``com (3,)`` and the capture point's ring at
-        ``capture_point``, ``(x, z)`` or ``(3,)`` (its height is ignored: both are drawn on
-        the floor)."""
-        c = np.asarray(com, dtype=np.float64).ravel()
-        xi = np.asarray(capture_point, dtype=np.float64).ravel()
-        xz = xi[[0, 2]] if xi.size == 3 else xi
-        y = self.ground_height + self._lift
-        self._com = np.array([c[0], y, c[2]])
-        self._xi = np.array([xz[0], y, xz[1]])
-        move_points(self._com_disc, self._com_base + self._com)
-        move_points(self._xi_ring, self._xi_base + self._xi)
-        move_points(self._link, np.array([self._com, self._xi]))
+        """:meth:`GroundMarkers.set_ground_points`, then a render (``render``)."""
+        self.markers.set_ground_points(com, capture_point)
         if render:
             self.render()
 
     @property
     def com_marker(self) -> Array:
         """Where the COM's marker is drawn ``(3,)`` (on the floor)."""
-        return np.array(self._com)
+        return self.markers.com_marker
 
     @property
     def capture_marker(self) -> Array:
         """Where the capture point's ring is drawn ``(3,)`` (on the floor)."""
-        return np.array(self._xi)
+        return self.markers.capture_marker
 
     def show_push(self, root: ArrayLike | None, force: ArrayLike | None, *,
                   render: bool = False) -> None:
-        """Draw the push acting on ``root (3,)`` along ``force (3,)`` (N; 0.4 m per 100 N, at
-        most 1 m), or hide it (``None``)."""
-        if root is None or force is None:
-            self._push_actor.visibility = False
-        else:
-            f = np.asarray(force, dtype=np.float64)
-            size = float(np.linalg.norm(f))
-            if size > 0:
-                length = min(0.004 * size, 1.0) / self.meters
-                end = np.asarray(root, dtype=np.float64)
-                move_points(self._push_line, np.array([end - f / size * length, end]))
-            self._push_actor.visibility = size > 0
+        """:meth:`GroundMarkers.show_push`, then a render (``render``)."""
+        self.markers.show_push(root, force)
         if render:
             self.render()
 
     @property
     def push_shown(self) -> bool:
         """Whether the push's arrow is drawn."""
-        return bool(self._push_actor.visibility)
+        return self.markers.push_shown
 
 
 class WalkingSimulator(LiveSimulator[WalkingScene]):
@@ -327,7 +282,7 @@ class WalkingSimulator(LiveSimulator[WalkingScene]):
         skel = character.skeleton
         self.pose = neutral_pose(character).forward_kinematics()[0][0]
         #: the floor's height, y-up meters (MuJoCo's floor plane, at z = -foot radius)
-        self.ground_height = float(_y_up(character.model.geom("floor").pos)[1])
+        self.ground_height = float(y_up(character.model.geom("floor").pos)[1])
         radius = foot_radius(character)  # skeleton units
         leg = self.parts.left
         tips = [c for c in skel.children(leg.toe) if np.linalg.norm(skel.offsets[c]) > 1e-9]
@@ -452,8 +407,6 @@ class WalkingSimulator(LiveSimulator[WalkingScene]):
                               fall=Fall("com", fraction=self.fall_fraction, stop=True),
                               name="walk")
         self.controller.reset(self.sim)
-        self._root_body = int(self.character.bodies[0])
-        self._jac = np.zeros((3, self.sim.model.nv))
         self.pushed = None
         self._last_tick = None
         self._rate = []
@@ -491,7 +444,7 @@ class WalkingSimulator(LiveSimulator[WalkingScene]):
         """A footprint where ``step``'s foot landed, along the foot as it lies now."""
         leg = self.parts.left if step.side == "left" else self.parts.right
         xpos = self.sim.data.xpos
-        forward = _y_up(xpos[leg.toe_body] - xpos[leg.foot])
+        forward = y_up(xpos[leg.toe_body] - xpos[leg.foot])
         self.scene.add_footprint(step.side, step.position / self.character.scale, forward,
                                  self.foot_length)
 
@@ -533,28 +486,19 @@ class WalkingSimulator(LiveSimulator[WalkingScene]):
     @property
     def com(self) -> Array:
         """The whole-body COM now (3,), y-up meters."""
-        return _y_up(self.sim.data.subtree_com[self._root_body])
+        return com_state(self.character, self.sim.model, self.sim.data, self.ground_height)[0]
 
     @property
     def com_velocity(self) -> Array:
         """The COM's velocity now (3,), y-up m/s: its Jacobian times ``qvel``."""
-        from course.physics.model import import_mujoco
-
-        mj = import_mujoco()
-        mj.mj_jacSubtreeCom(self.sim.model, self.sim.data, self._jac, self._root_body)
-        return _y_up(self._jac @ self.sim.data.qvel)
+        return com_state(self.character, self.sim.model, self.sim.data, self.ground_height)[1]
 
     @property
     def capture_point(self) -> Array:
         """The capture point now ``(x, z)`` (2,), m: :func:`course.physics.lip.capture_point`
         of the COM and its velocity over the floor, :math:`\\omega_0 = \\sqrt{g/h}` with
         :math:`h` the COM's height above it."""
-        from course.physics.lip import capture_point, natural_frequency
-
-        c, v = self.com, self.com_velocity
-        w0 = natural_frequency(max(c[1] - self.ground_height, 1e-3))
-        xi: Array = capture_point(c[[0, 2]], v[[0, 2]], w0)
-        return xi
+        return com_state(self.character, self.sim.model, self.sim.data, self.ground_height)[2]
 
     def _draw_state(self) -> None:
         from course.physics.model import motion_from_qpos
@@ -601,11 +545,9 @@ class WalkingSimulator(LiveSimulator[WalkingScene]):
         else:
             lines.append(f"play: {self.speed:g}× real time, {self.steps_per_tick} frames "
                          f"of 1/60 s a tick")
-        key = " ".join(
-            f"<span style='white-space:nowrap'><span style='display:inline-block;width:10px;"
-            f"height:10px;background:{COLORS[k]};margin:0 4px 0 6px'></span>{label}</span>"
-            for k, label in (("left", "left foot"), ("right", "right foot"),
-                             ("com", "COM"), ("capture", "capture point ξ")))
+        key = color_key([(COLORS[k], label) for k, label in (
+            ("left", "left foot"), ("right", "right foot"), ("com", "COM"),
+            ("capture", "capture point ξ"))])
         self.readout.value = "<br>".join([*lines, key])
         self.scene.render()
 
