@@ -103,8 +103,8 @@ def test_the_push_com_and_capture_point_are_drawn_where_they_are(view, cmu) -> N
     view.advance(16)  # t = 0.267 s: the next frame pushes
     assert view.pushing and view.markers.push_shown
     root = view.scene.skeleton().positions[0]
-    assert view.markers._push_line.points[1] == pytest.approx(root)  # into the root
-    assert np.all(np.diff(view.markers._push_line.points[:, 2]) > 0)  # along +z
+    assert view.markers.push_segment[1] == pytest.approx(root)  # into the root
+    assert np.all(np.diff(view.markers.push_segment[:, 2]) > 0)  # along +z
     view.advance(5)  # t = 0.35 s: the push has ended
     before = _com_y_up(cmu, view.sim.data)
     view.advance(1)

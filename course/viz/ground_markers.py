@@ -131,6 +131,11 @@ class GroundMarkers:
         self._push_actor.visibility = size > 0
 
     @property
+    def push_segment(self) -> Array:
+        """The push's arrow ``(2, 3)``: from its tail to the root it pushes (as last drawn)."""
+        return np.array(self._push_line.points)
+
+    @property
     def push_shown(self) -> bool:
         """Whether the push's arrow is drawn."""
         return bool(self._push_actor.visibility)
