@@ -40,13 +40,11 @@ def com_state(character: Any, model: Any, data: Any, ground_height: float
     """The whole-body COM ``c (3,)`` and its velocity ``ċ (3,)`` (y-up m, m/s: the subtree
     COM's Jacobian times ``qvel``) of MuJoCo's ``data``, and the capture point ``ξ (2,)``
     ``(x, z)`` in m over a floor at ``ground_height`` (y-up m)."""
+    from course.physics.balance import com_jacobian
     from course.physics.lip import capture_point, natural_frequency
-    from course.physics.model import import_mujoco
 
-    root = int(character.bodies[0])
-    jac = np.zeros((3, model.nv))
-    import_mujoco().mj_jacSubtreeCom(model, data, jac, root)
-    c, v = y_up(data.subtree_com[root]), y_up(jac @ data.qvel)
+    c = y_up(data.subtree_com[int(character.bodies[0])])
+    v = y_up(com_jacobian(character, model, data) @ data.qvel)
     w0 = natural_frequency(max(c[1] - ground_height, 1e-3))
     xi: Array = capture_point(c[[0, 2]], v[[0, 2]], w0)
     return c, v, xi
@@ -105,6 +103,17 @@ class GroundMarkers:
         move_points(self._com_disc, self._com_base + self._com)
         move_points(self._xi_ring, self._xi_base + self._xi)
         move_points(self._link, np.array([self._com, self._xi]))
+
+    def follow(self, character: Any, model: Any, data: Any, ground_height: float,
+               root: ArrayLike | None, force: ArrayLike | None) -> tuple[Array, Array, Array]:
+        """The markers where MuJoCo's ``data`` has ``character``: its COM and capture point
+        (:func:`com_state` over a floor at ``ground_height``, y-up m) and the push ``force``
+        on ``root`` (skeleton units; ``None``: no push acts). Returns :func:`com_state`'s
+        ``(c, ċ, ξ)``, computed once per frame for the readout too."""
+        state = com_state(character, model, data, ground_height)
+        self.set_ground_points(state[0] / character.scale, state[2] / character.scale)
+        self.show_push(root, force)
+        return state
 
     @property
     def com_marker(self) -> Array:

@@ -40,7 +40,7 @@ import numpy as np
 
 from .._typing import Array
 from .backend import latest_on_gl_thread
-from .ground_markers import COLORS, GroundMarkers, color_key, com_state, y_up
+from .ground_markers import COLORS, GroundMarkers, color_key, y_up
 from .live_simulator import LiveSimulator, log_slider
 from .scene import SkeletonScene
 
@@ -58,6 +58,8 @@ MEASURED = {"com": {0: 121.9, 180: 159.4, 90: 668.8},
             "left foot": {0: 96.9, 180: 128.1, 90: 84.4, -90: 50.0},
             "right foot": {0: 96.9, 180: 128.1, -90: 71.9, 90: 65.6}}
 GROUND_IN_VIEW = 0.5  # m of floor about the feet the camera keeps in view
+KEY = color_key([(COLORS["com"], "COM"), (COLORS["capture"], "capture point ξ"),
+                 (COLORS["push"], "push")])  # the readout's last line
 
 
 class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
@@ -259,12 +261,10 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
 
         motion = motion_from_qpos(self.character, self.sim.data.qpos[None], self.frame_time)
         pose = motion.forward_kinematics()[0][0]
-        c, _, xi = com_state(self.character, self.sim.model, self.sim.data, self.ground_height)
-        scale = self.character.scale
-        self.markers.set_ground_points(c / scale, xi / scale)
         push = self.pushed if self.pushing else None
-        self.markers.show_push(None if push is None else pose[0],
-                               None if push is None else push.force)
+        self.markers.follow(self.character, self.sim.model, self.sim.data, self.ground_height,
+                            None if push is None else pose[0],
+                            None if push is None else push.force)
         self.scene.set_pose(pose, render=False)
 
     def _measured(self) -> str:
@@ -296,11 +296,9 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
         size = float(np.linalg.norm(self.push_force()))
         push = (f"push: {size:.0f} N for {self.push_duration:g} s at {self.push_start:g} s "
                 f"= {size * self.push_duration:.1f} N s" if size > 0 else "push: none")
-        key = color_key([(COLORS["com"], "COM"), (COLORS["capture"], "capture point ξ"),
-                         (COLORS["push"], "push")])
         lines = [state, push, self._measured(), self._gain_line,
                  f"play: {self.speed:g}× real time, {self.steps_per_tick} frames of 1/60 s "
-                 f"a tick", key]
+                 f"a tick", KEY]
         self.readout.value = "<br>".join(lines)
         self.scene.render()
 

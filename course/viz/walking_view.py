@@ -59,6 +59,9 @@ VIEW_DIRECTION = (1.0, 0.62, 0.75)
 GROUND_IN_VIEW = (0.55, 0.85, 0.55)
 FOOTPRINT_CAPACITY = 256  # footprints drawn per foot (the oldest drop out)
 MAX_TIME = 60.0  # s: a walk stops there (reset starts another)
+KEY = color_key([(COLORS[k], label) for k, label in (
+    ("left", "left foot"), ("right", "right foot"), ("com", "COM"),
+    ("capture", "capture point ξ"))])  # the readout's last line
 
 
 class WalkingScene(SkeletonScene):
@@ -505,13 +508,11 @@ class WalkingSimulator(LiveSimulator[WalkingScene]):
 
         motion = motion_from_qpos(self.character, self.sim.data.qpos[None], self.frame_time)
         positions = motion.forward_kinematics()[0][0]
-        scale = self.character.scale
         push = self.pushed
         acting = push is not None and push.active(self.sim.time, self.frame_time)
-        self.scene.show_push(positions[0] if acting else None,
-                             push.force if acting else None)
-        self.scene.set_ground_points(self.com / scale, self.capture_point / scale,
-                                     render=False)
+        self._balance = self.scene.markers.follow(
+            self.character, self.sim.model, self.sim.data, self.ground_height,
+            positions[0] if acting else None, push.force if acting else None)
         self.scene.set_pose(positions, render=False)
 
     def _show(self) -> None:
@@ -524,7 +525,7 @@ class WalkingSimulator(LiveSimulator[WalkingScene]):
             state = f"walked {self.strides} strides ({steps} steps) in {t:.0f} s: the end"
         else:
             state = f"t = {t:.2f} s: {self.strides} strides walked ({steps} steps)"
-        c, v, xi = self.com, self.com_velocity, self.capture_point
+        c, v, xi = self._balance  # as drawn: the sim moves only in advance, which draws
         ahead = 100 * float(np.linalg.norm(xi - c[[0, 2]]))
         lines = [state, f"COM {c[1] - self.ground_height:.2f} m high, {v[2]:+.2f} m/s "
                         f"forward; ξ {ahead:.0f} cm from it"]
@@ -545,10 +546,7 @@ class WalkingSimulator(LiveSimulator[WalkingScene]):
         else:
             lines.append(f"play: {self.speed:g}× real time, {self.steps_per_tick} frames "
                          f"of 1/60 s a tick")
-        key = color_key([(COLORS[k], label) for k, label in (
-            ("left", "left foot"), ("right", "right foot"), ("com", "COM"),
-            ("capture", "capture point ξ"))])
-        self.readout.value = "<br>".join([*lines, key])
+        self.readout.value = "<br>".join([*lines, KEY])
         self.scene.render()
 
 
