@@ -374,17 +374,25 @@ async def _shoot_views(page, kinds: list[str], shots: list[Shot], notebook: str)
     """Every view at its start at every size and in both layouts first, before anything
     moves (a start typed back into a slider is only as exact as its readout: a re-solve,
     other numbers); then the moves, with the notebook alone: Y = 90 at every size, the
-    slider's ends at the small one, where space is tight."""
+    slider's ends at the small one, where space is tight. The layouts alternate from one
+    size to the next, so each size starts in the layout the last one ended in and the
+    moves start with the notebook alone: two layout changes, not one per layout and size."""
+    if not kinds:  # nothing to shoot: no layout or viewport to wait for
+        return
+    layouts = LAYOUTS
     for size in SIZES:
         await page.set_viewport_size({"width": size[0], "height": size[1]})
         await asyncio.sleep(1.0)
-        for shell_call, where in LAYOUTS:
-            await _layout(page, shell_call)
+        for j, (shell_call, where) in enumerate(layouts):
+            if j:  # the first is the one the page is in (it opens with the notebook alone)
+                await _layout(page, shell_call)
             for k, kind in enumerate(kinds):
                 view = page.locator(f"[data-gallery-view='{k}']")
                 # beside the file browser a view may wrap under its panel: whole, not at once
                 await _shoot(page, view, shots, notebook, size, k, "start" + where, kind,
                              seen_at_once=not where)
+        layouts = layouts[::-1]
+    if layouts[0] != LAYOUTS[0]:  # an odd number of sizes ends beside the file browser
         await _layout(page, LAYOUTS[0][0])
     for size in reversed(SIZES):
         await page.set_viewport_size({"width": size[0], "height": size[1]})
