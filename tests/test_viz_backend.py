@@ -146,6 +146,21 @@ def test_trame_is_kept_from_downloading_its_wasm_bundle(monkeypatch, tmp_path):
     assert os.environ["VTK_WASM_DIR_OVERRIDE"] == "/somewhere/else"
 
 
+def test_trames_websocket_sends_uncompressed_unless_the_user_asks(monkeypatch):
+    """The name is the one wslink reads when its server starts (``reload_settings``)."""
+    from wslink.backends import aiohttp as wslink_aiohttp
+
+    monkeypatch.setattr(wslink_aiohttp, "WS_COMPRESS", wslink_aiohttp.WS_COMPRESS)  # restored
+    monkeypatch.delenv("WSLINK_WS_COMPRESS", raising=False)
+    backend.configure_environment()
+    wslink_aiohttp.reload_settings()
+    assert wslink_aiohttp.WS_COMPRESS is False
+    monkeypatch.setenv("WSLINK_WS_COMPRESS", "1")  # the user's own wins
+    backend.configure_environment()
+    wslink_aiohttp.reload_settings()
+    assert wslink_aiohttp.WS_COMPRESS is True
+
+
 def test_a_kernel_gets_the_browser_rendered_view_unless_the_browser_cannot_reach_it(monkeypatch):
     import sys
 

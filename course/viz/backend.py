@@ -57,7 +57,12 @@ def configure_environment() -> None:
       does not need the bundle).
     - Without a display: off-screen rendering through EGL, so views and screenshots work in
       CI and on remote kernels.
+    - ``WSLINK_WS_COMPRESS=0``: trame's websocket deflates every message by default. The
+      arrays a browser-drawn view fetches per change are floats, which barely compress
+      (notebook 06's 80 KB per press: 74 KB, for 2.3 ms of CPU and a thread hop per message
+      on the kernel's loop), and the student waits for them.
     """
+    os.environ.setdefault("WSLINK_WS_COMPRESS", "0")
     wasm_dir = _cache_dir() / "vtk-wasm"
     try:
         wasm_dir.mkdir(parents=True, exist_ok=True)
