@@ -123,3 +123,71 @@ def test_the_push_com_and_capture_point_are_drawn_where_they_are(view, cmu) -> N
     np.testing.assert_allclose(drawn, xi, atol=0.01)
     assert drawn[1] > c[2]  # ahead, the push's way
     assert "capture point ξ" in view.readout.value
+
+
+class _KernelLoop:
+    """The kernel's loop as :mod:`course.viz.backend` sees it: callbacks kept, run on demand."""
+
+    def __init__(self) -> None:
+        self.callbacks: list = []
+
+    def add_callback(self, fn) -> None:
+        self.callbacks.append(fn)
+
+
+def test_a_new_stance_is_designed_beside_the_kernel_while_the_last_gain_plays(
+        view, cmu, lqr, monkeypatch) -> None:
+    import threading
+
+    from course.physics import lqr_balance
+    from course.viz import backend
+
+    loop, release, asked = _KernelLoop(), threading.Event(), []
+
+    def slow_design(character, *, stance):  # the 4 s design, held until the test says
+        asked.append((threading.current_thread() is threading.main_thread(), stance))
+        release.wait(30)
+        return lqr
+
+    monkeypatch.setattr(backend, "_kernel_loop", lambda: loop)
+    monkeypatch.setattr(lqr_balance, "design", slow_design)
+    view.sliders["stance"].value = "left foot"
+    view.sliders["velocity"].value = 3.0  # asked again while designing: no second design
+    assert view.designing and "designing for left foot" in view.readout.value
+    assert view.controller.K is lqr.K  # the last gain plays on, the kernel free
+    view.advance(5)
+    assert view.sim.frame == 5 and "designing for left foot" in view.readout.value
+    release.set()
+    worker = next(t for t in threading.enumerate() if t.name == "course-background")
+    worker.join(30)
+    assert asked == [(False, 0)]  # one design, on another thread, for the stance chosen
+    assert len(loop.callbacks) == 1 and view.designing  # handed back to the kernel's loop
+    loop.callbacks.pop()()
+    assert not view.designing and "designing" not in view.readout.value
+    np.testing.assert_allclose(view.controller.K, reweigh(cmu, lqr, Weights(velocity=3.0)).K)
+    assert view.sim.frame == 0 and view.play.playing  # the new gain's run, from its start
+    assert "gain designed in" in view.readout.value
+
+
+def test_a_failed_design_says_why_and_the_last_gain_stays(view, lqr, monkeypatch) -> None:
+    import threading
+
+    from course.physics import lqr_balance
+    from course.viz import backend
+
+    loop = _KernelLoop()
+
+    def broken(character, *, stance):
+        raise RuntimeError("no equilibrium on one leg")
+
+    monkeypatch.setattr(backend, "_kernel_loop", lambda: loop)
+    monkeypatch.setattr(lqr_balance, "design", broken)
+    view.sliders["stance"].value = "left foot"
+    worker = next((t for t in threading.enumerate() if t.name == "course-background"), None)
+    if worker is not None:
+        worker.join(30)
+    loop.callbacks.pop()()
+    assert not view.designing and view.controller.K is lqr.K
+    assert "the design for left foot failed: RuntimeError: no equilibrium" in view.readout.value
+    view.advance(1)  # the next tick keeps saying it
+    assert "failed" in view.readout.value

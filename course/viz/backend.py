@@ -239,6 +239,28 @@ def soon(fn: Callable[[], None]) -> None:
     loop.add_callback(fn)
 
 
+def in_background(work: Callable[[], T], done: Callable[[T], None],
+                  failed: Callable[[Exception], None]) -> None:
+    """Run ``work()`` beside the kernel and hand its result to ``done`` (its error to
+    ``failed``) on the GL thread: a computation of seconds that touches no view (a gain's
+    design) leaves the views and widgets answering meanwhile. Outside a kernel (scripts,
+    tests) there is nothing to keep answering: ``done(work())`` at once, errors raised."""
+    loop = _kernel_loop()
+    if loop is None:
+        done(work())
+        return
+
+    def run() -> None:
+        try:
+            result = work()
+        except Exception as exc:  # reported where the view can say it
+            loop.add_callback(lambda err=exc: failed(err))
+            return
+        loop.add_callback(lambda: done(result))
+
+    threading.Thread(target=run, name="course-background", daemon=True).start()
+
+
 def call_later(delay: float, fn: Callable[[], None]) -> None:
     """Run ``fn()`` on the kernel's main loop (the GL thread) in ``delay`` seconds, without
     blocking; outside a kernel there is no loop to run it (a RuntimeError says so)."""

@@ -19,8 +19,9 @@ joints, the feet, the velocities) and ``R``. On release the gain is designed aga
 (:func:`~course.physics.lqr_balance.reweigh`: the DARE alone, a few tenths of a second, the
 equilibrium and linearisation kept) and the run starts again and plays; the stance (two feet,
 one leg) needs a whole :func:`~course.physics.lqr_balance.design` (about 4 s) the first time
-it is chosen. "push" runs again with the push sliders' push. The readout says whether it stood
-or when it fell, beside the largest pushes measured in ``docs/control.md``.
+it is chosen, computed beside the kernel while the last gain plays on. "push" runs again with
+the push sliders' push. The readout says whether it stood or when it fell, beside the largest
+pushes measured in ``docs/control.md``.
 
 As in every view of :mod:`course.viz`, widget events run on the GL thread and setting a
 widget's value from code does what moving it does, so tests and notebooks drive it too.
@@ -39,7 +40,7 @@ import ipywidgets as widgets
 import numpy as np
 
 from .._typing import Array
-from .backend import latest_on_gl_thread
+from .backend import in_background, latest_on_gl_thread
 from .ground_markers import COLORS, GroundMarkers, color_key, y_up
 from .live_simulator import LiveSimulator, log_slider
 from .scene import SkeletonScene
@@ -113,6 +114,8 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
         self.design_time = time.perf_counter() - start
         self._gain_line = gain_line(self.design, self.design_time)
         self._designs = {self.design.stance: self.design}  # equilibrium and (A, B) per stance
+        self._designing: set[int | None] = set()  # stances whose design runs beside the kernel
+        self._design_note = ""  # the readout's first line while one runs, or why it failed
         pose = motion_from_qpos(character, self.design.equilibrium.qpos[None],
                                 self.frame_time).forward_kinematics()[0][0]
         scene = SkeletonScene(window_size=window_size, camera="iso")
@@ -175,21 +178,49 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
         a = math.radians(float(self.sliders["push_direction"].value))
         return float(self.sliders["push"].value) * np.array([math.sin(a), 0.0, math.cos(a)])
 
-    def redesign(self) -> None:
-        """The gain of the sliders' weights and stance (timed: :attr:`design_time`), then a
-        run from the start, playing."""
+    def redesign(self, asked: float | None = None) -> None:
+        """The gain of the sliders' weights and stance (timed from ``asked``, default now:
+        :attr:`design_time`), then a run from the start, playing. A stance not designed before
+        needs its equilibrium and linearisation first (about 4 s): in a kernel they are
+        computed beside it, the last gain playing on meanwhile, and the stance's gain follows
+        once they are done."""
         from course.physics import lqr_balance
 
-        stance = self.stance
-        start = time.perf_counter()
+        stance, label = self.stance, self.sliders["stance"].value
+        start = time.perf_counter() if asked is None else asked
         if stance not in self._designs:
-            self.readout.value = (f"designing for {self.sliders['stance'].value}: equilibrium "
-                                  f"and linearisation, about 4 s &hellip;")
-            self._designs[stance] = lqr_balance.design(self.character, stance=stance)
+            if stance not in self._designing:  # one design per stance, however often asked
+                self._designing.add(stance)
+                self._design_note = (f"<i>designing for {label}: equilibrium and "
+                                     f"linearisation, about 4 s &hellip; (the last gain plays "
+                                     f"meanwhile)</i>")
+                self._show()
+                in_background(lambda: lqr_balance.design(self.character, stance=stance),
+                              lambda d: self._designed(stance, d, start),
+                              lambda err: self._design_failed(label, err))
+            return
         self.design = lqr_balance.reweigh(self.character, self._designs[stance], self.weights())
         self.design_time = time.perf_counter() - start
         self._gain_line = gain_line(self.design, self.design_time)
         self.rerun()
+
+    @property
+    def designing(self) -> bool:
+        """Whether a stance's equilibrium and linearisation are being computed."""
+        return bool(self._designing)
+
+    def _designed(self, stance: int | None, design: Any, start: float) -> None:
+        self._designing.discard(stance)
+        self._designs[stance] = design
+        self._design_note = ""
+        if self.stance == stance:  # still the stance asked for: its gain, timed from the ask
+            self.redesign(asked=start)
+
+    def _design_failed(self, label: str, err: Exception) -> None:
+        self._designing.clear()
+        self._design_note = (f"<span style='color:#a4161a'>the design for {label} failed: "
+                             f"{type(err).__name__}: {err}</span>")
+        self._show()
 
     def rerun(self) -> None:
         """Start the run again (with the push sliders' push) and play it."""
@@ -296,7 +327,8 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
         size = float(np.linalg.norm(self.push_force()))
         push = (f"push: {size:.0f} N for {self.push_duration:g} s at {self.push_start:g} s "
                 f"= {size * self.push_duration:.1f} N s" if size > 0 else "push: none")
-        lines = [state, push, self._measured(), self._gain_line,
+        lines = [self._design_note] if self._design_note else []
+        lines += [state, push, self._measured(), self._gain_line,
                  f"play: {self.speed:g}× real time, {self.steps_per_tick} frames of 1/60 s "
                  f"a tick", KEY]
         self.readout.value = "<br>".join(lines)
