@@ -197,7 +197,7 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
                 self._show()
                 in_background(lambda: lqr_balance.design(self.character, stance=stance),
                               lambda d: self._designed(stance, d, start),
-                              lambda err: self._design_failed(label, err))
+                              lambda err: self._design_failed(stance, label, err))
             return
         self.design = lqr_balance.reweigh(self.character, self._designs[stance], self.weights())
         self.design_time = time.perf_counter() - start
@@ -216,8 +216,8 @@ class LQRBalanceSimulator(LiveSimulator[SkeletonScene]):
         if self.stance == stance:  # still the stance asked for: its gain, timed from the ask
             self.redesign(asked=start)
 
-    def _design_failed(self, label: str, err: Exception) -> None:
-        self._designing.clear()
+    def _design_failed(self, stance: int | None, label: str, err: Exception) -> None:
+        self._designing.discard(stance)  # chosen again, it is tried again
         self._design_note = (f"<span style='color:#a4161a'>the design for {label} failed: "
                              f"{type(err).__name__}: {err}</span>")
         self._show()
